@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# One entry point for a fresh Debian machine:
+#   bash scripts/run.sh demo   install what is missing, build, run `orchard demo`
+#   bash scripts/run.sh test   install what is missing, build, run the test suite
+#   bash scripts/run.sh build  install what is missing, build
+# Installing needs root (apt-get); nothing is installed when all is there.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+what="${1:-build}"
+jobs="${ORCHARD_JOBS:-$(nproc)}"
+
+missing=()
+while read -r pkg; do
+  [[ -z "$pkg" || "$pkg" == \#* ]] && continue
+  dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed" || missing+=("$pkg")
+done < scripts/debian-packages.txt
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "Installing missing Debian packages: ${missing[*]}"
+  sudo_cmd=""
+  [ "$(id -u)" -ne 0 ] && sudo_cmd="sudo"
+  $sudo_cmd apt-get update -q
+  DEBIAN_FRONTEND=noninteractive $sudo_cmd apt-get install -y -q --no-install-recommends "${missing[@]}"
+fi
+
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build build -j "$jobs"
+
+case "$what" in
+  build) ;;
+  demo) ./build/orchard demo ;;
+  test) ctest --test-dir build --output-on-failure -j "$jobs" ;;
+  *) echo "usage: bash scripts/run.sh [demo|test|build]" >&2; exit 2 ;;
+esac

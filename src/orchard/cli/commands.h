@@ -1,0 +1,15 @@
+// The `orchard` program's subcommands. Each Add*Command registers one
+// subcommand (with its --help) on the app; its callback does the work and
+// throws orchard::Error on bad input.
+#pragma once
+
+namespace CLI {
+class App;
+}
+
+namespace orchard {
+
+// --- registered commands (one line each; keep in data-flow order) ---
+// (none yet)
+
+}  // namespace orchard

@@ -1,0 +1,121 @@
+#include "orchard/core/file_io.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <fstream>
+#include <sstream>
+
+#include <unistd.h>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "orchard/core/error.h"
+
+namespace orchard {
+namespace {
+
+// A temporary sibling of `path` that keeps its extension: "a.png" -> ".a.tmp123_0.png".
+fs::path TemporarySibling(const fs::path& path) {
+  static std::atomic<int> counter{0};
+  const std::string name = "." + path.stem().string() + ".tmp" + std::to_string(::getpid()) + "_" +
+                           std::to_string(counter++) + path.extension().string();
+  return path.parent_path() / name;
+}
+
+void EnsureParent(const fs::path& path) {
+  const fs::path parent = path.parent_path();
+  if (parent.empty()) return;
+  std::error_code ec;
+  fs::create_directories(parent, ec);
+  if (ec) Fail("cannot create folder ", parent.string(), ": ", ec.message());
+}
+
+}  // namespace
+
+std::string ReadTextFile(const fs::path& path) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) Fail("file not found: ", path.string());
+  std::ifstream in(path, std::ios::binary);
+  if (!in) Fail("cannot open ", path.string());
+  std::ostringstream out;
+  out << in.rdbuf();
+  return out.str();
+}
+
+void WriteFileAtomic(const fs::path& path, const std::function<void(const fs::path&)>& write) {
+  EnsureParent(path);
+  const fs::path tmp = TemporarySibling(path);
+  try {
+    write(tmp);
+  } catch (...) {
+    std::error_code ec;
+    fs::remove(tmp, ec);
+    throw;
+  }
+  std::error_code ec;
+  if (!fs::exists(tmp, ec)) Fail("writing ", path.string(), " produced no file");
+  fs::rename(tmp, path, ec);
+  if (ec) {
+    fs::remove(tmp, ec);
+    Fail("cannot write ", path.string(), ": ", ec.message());
+  }
+}
+
+void WriteTextFileAtomic(const fs::path& path, const std::string& content) {
+  WriteFileAtomic(path, [&](const fs::path& tmp) {
+    std::ofstream out(tmp, std::ios::binary);
+    if (!out) Fail("cannot write ", path.string());
+    out << content;
+    out.close();
+    if (!out) Fail("cannot write ", path.string(), " (disk full?)");
+  });
+}
+
+void WriteImageAtomic(const fs::path& path, const cv::Mat& image) {
+  WriteFileAtomic(path, [&](const fs::path& tmp) {
+    bool ok = false;
+    try {
+      ok = cv::imwrite(tmp.string(), image);
+    } catch (const cv::Exception& e) {
+      Fail("cannot write image ", path.string(), ": ", e.what());
+    }
+    if (!ok) Fail("cannot write image ", path.string());
+  });
+}
+
+cv::Mat ReadImage(const fs::path& path, int flags) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) Fail("image not found: ", path.string());
+  cv::Mat image;
+  try {
+    image = cv::imread(path.string(), flags);
+  } catch (const cv::Exception&) {
+    image.release();
+  }
+  if (image.empty()) Fail("cannot decode image: ", path.string());
+  return image;
+}
+
+bool IsImageFile(const fs::path& path) {
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".bmp" || ext == ".tif" ||
+         ext == ".tiff";
+}
+
+std::vector<fs::path> ListImages(const fs::path& dir) {
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) Fail("not a folder: ", dir.string());
+  std::vector<fs::path> images;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    if (entry.is_regular_file() && IsImageFile(entry.path()) &&
+        entry.path().filename().string().rfind('.', 0) != 0) {
+      images.push_back(entry.path());
+    }
+  }
+  std::sort(images.begin(), images.end());
+  return images;
+}
+
+}  // namespace orchard

@@ -1,0 +1,43 @@
+// File helpers shared by every stage: atomic writes (write to a temporary name,
+// rename when complete, so an interrupted run never leaves a half file or
+// clobbers an earlier result), reading text and images with clear errors.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+namespace orchard {
+
+namespace fs = std::filesystem;
+
+// Reads a whole text file; throws orchard::Error naming the path if it cannot.
+std::string ReadTextFile(const fs::path& path);
+
+// Writes `content` to `path` atomically (temporary file in the same folder,
+// then rename). Creates missing parent folders.
+void WriteTextFileAtomic(const fs::path& path, const std::string& content);
+
+// Calls `write(tmp_path)` to produce the file under a temporary name in the
+// same folder, then renames it to `path`. For writers that need a path (cv::imwrite,
+// gnuplot). The temporary keeps the extension so format-by-extension writers work.
+void WriteFileAtomic(const fs::path& path, const std::function<void(const fs::path&)>& write);
+
+// Writes an image atomically; the format follows the extension (.png, .jpg).
+void WriteImageAtomic(const fs::path& path, const cv::Mat& image);
+
+// Reads an image (cv::imread flags); throws orchard::Error when the file is
+// missing or cannot be decoded.
+cv::Mat ReadImage(const fs::path& path, int flags = 1 /* cv::IMREAD_COLOR */);
+
+// Image files (.png .jpg .jpeg .bmp .tif .tiff, any case) directly in `dir`,
+// sorted by name. Throws when `dir` is not a folder.
+std::vector<fs::path> ListImages(const fs::path& dir);
+
+// True when the extension is one of the image extensions above.
+bool IsImageFile(const fs::path& path);
+
+}  // namespace orchard
