@@ -75,6 +75,17 @@ TEST(StudyProtocol, TiesInScoreKeepFileOrder) {
   EXPECT_NEAR(EvaluateStudyProtocol({Frame(gt, {px, py_high})}).f1[T(11)], 1.0, kTol);
 }
 
+TEST(StudyProtocol, TiesInIoUTakeTheFirstGroundTruth) {
+  // gt A=[0,0,10,10], B=[10,0,20,10]. p1=[5,0,15,10] (.9): IoU 50/150 = 1/3
+  // with both. p2 = B (.8). p1 takes A (the first of the tie), p2 takes B:
+  // at t = 0.33 TP 2, F1 = 1 (had p1 taken B, p2 would find nothing: F1 0.5).
+  // At t = 0.34 p1 matches nothing, p2 takes B: P = R = F1 = 1/2.
+  const auto curve = EvaluateStudyProtocol({Frame({B(0, 0, 10, 10), B(10, 0, 20, 10)},
+                                                  {{B(5, 0, 15, 10), 0.9}, {B(10, 0, 20, 10), 0.8}})});
+  EXPECT_NEAR(curve.f1[T(33)], 1.0, kTol);
+  EXPECT_NEAR(curve.f1[T(34)], 0.5, kTol);
+}
+
 TEST(StudyProtocol, EmptyFramesConventions) {
   // F1: 1 gt, exact pred: P=R=F1=1. F2: neither: P=R=1, F1=1.
   // F3: no gt, 1 pred: P=0, R=1, F1=0. F4: 1 gt, no pred: P=1, R=0, F1=0.
