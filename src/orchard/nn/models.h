@@ -1,0 +1,83 @@
+// Network architectures trained from scratch on CPU: a ResNet classifier (the
+// cluster counter) and a VGG-style U-Net (the segmentation detector). Both take
+// a width multiplier so a narrow version trains on a laptop.
+//
+// This header includes LibTorch: include it only from nn/ and from the .cc
+// files of the detectors and counters that run the networks.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+#include <torch/torch.h>
+
+namespace orchard::nn {
+
+struct ResNetOptions {
+  // 18 and 34 use basic blocks, 50 bottleneck blocks (He et al. 2016).
+  int depth = 18;
+  // Channels of the first stage (64 in the paper). 16 trains on CPU.
+  int base_width = 64;
+  int in_channels = 3;
+  int num_classes = 7;  // counts 0..6
+
+  void Check() const;
+  nlohmann::json ToJson() const;
+  static ResNetOptions FromJson(const nlohmann::json& json);
+};
+
+class ResNetImpl : public torch::nn::Module {
+ public:
+  explicit ResNetImpl(const ResNetOptions& options);
+  // [N, C, H, W] float in [0, 1] (normalised by the caller) -> [N, classes] logits.
+  torch::Tensor forward(torch::Tensor x);
+  const ResNetOptions& options() const { return options_; }
+
+ private:
+  ResNetOptions options_;
+  torch::nn::Sequential stem_{nullptr};
+  torch::nn::Sequential stages_{nullptr};
+  torch::nn::Linear head_{nullptr};
+};
+TORCH_MODULE(ResNet);
+
+struct UNetOptions {
+  // Channels of the first encoder block; VGG-16 uses 64 and doubles it per
+  // block up to 8x. 8 or 16 trains on CPU.
+  int base_width = 64;
+  int in_channels = 3;
+  int num_classes = 2;  // background, apple
+  // Encoder blocks (VGG-16: 5, with 2, 2, 3, 3, 3 convolutions). Inputs must be
+  // divisible by 2^(blocks - 1).
+  int blocks = 5;
+  // Batch normalisation after each convolution: trains far more reliably from
+  // scratch than the original VGG without it.
+  bool batch_norm = true;
+
+  void Check() const;
+  nlohmann::json ToJson() const;
+  static UNetOptions FromJson(const nlohmann::json& json);
+  int InputMultiple() const { return 1 << (blocks - 1); }
+};
+
+class UNetImpl : public torch::nn::Module {
+ public:
+  explicit UNetImpl(const UNetOptions& options);
+  // [N, C, H, W] -> [N, classes, H, W] logits.
+  torch::Tensor forward(torch::Tensor x);
+  const UNetOptions& options() const { return options_; }
+
+ private:
+  UNetOptions options_;
+  std::vector<torch::nn::Sequential> encoder_;
+  std::vector<torch::nn::ConvTranspose2d> up_;
+  std::vector<torch::nn::Sequential> decoder_;
+  torch::nn::Conv2d classifier_{nullptr};
+};
+TORCH_MODULE(UNet);
+
+// Number of trainable parameters.
+int64_t CountParameters(const torch::nn::Module& module);
+
+}  // namespace orchard::nn

@@ -1,0 +1,138 @@
+#include "orchard/nn/models.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "orchard/core/error.h"
+#include "orchard/nn/checkpoint.h"
+#include "orchard/nn/losses.h"
+#include "orchard/nn/trainer.h"
+
+namespace orchard::nn {
+namespace {
+
+fs::path TempDir(const std::string& name) {
+  fs::path dir = fs::temp_directory_path() / ("orchard_nn_test_" + name);
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+TEST(Models, ResNetShapes) {
+  for (int depth : {18, 34, 50}) {
+    ResNet net(ResNetOptions{depth, 4, 3, 7});
+    net->eval();
+    EXPECT_EQ(net->forward(torch::rand({2, 3, 64, 64})).sizes(), (std::vector<int64_t>{2, 7})) << depth;
+  }
+  EXPECT_THROW(ResNet(ResNetOptions{19, 4, 3, 7}), Error);
+}
+
+TEST(Models, UNetKeepsResolution) {
+  UNetOptions options;
+  options.base_width = 4;
+  UNet net(options);
+  net->eval();
+  EXPECT_EQ(net->forward(torch::rand({1, 3, 32, 48})).sizes(), (std::vector<int64_t>{1, 2, 32, 48}));
+  options.blocks = 3;
+  UNet small(options);
+  small->eval();
+  EXPECT_EQ(small->forward(torch::rand({1, 3, 8, 12})).sizes(), (std::vector<int64_t>{1, 2, 8, 12}));
+}
+
+TEST(Losses, InverseFrequencyWeights) {
+  auto w = InverseFrequencyWeights({900, 100});
+  // 1/900 : 1/100 normalised = 0.1 : 0.9.
+  EXPECT_NEAR(w[0], 0.1, 1e-12);
+  EXPECT_NEAR(w[1], 0.9, 1e-12);
+  EXPECT_THROW(InverseFrequencyWeights({0, 0}), Error);
+}
+
+TEST(Losses, FocalLossKnownValue) {
+  // One positive with logit 0: p = 0.5, ce = ln 2, (1-p)^2 = 0.25, alpha 0.25.
+  torch::Tensor loss = SigmoidFocalLoss(torch::zeros({1}), torch::ones({1}));
+  EXPECT_NEAR(loss.item<double>(), 0.25 * 0.25 * std::log(2.0), 1e-6);
+  // gamma 0 and alpha 0.5 is half the binary cross-entropy.
+  loss = SigmoidFocalLoss(torch::tensor({2.0f}), torch::zeros({1}), 0.5, 0.0);
+  EXPECT_NEAR(loss.item<double>(), 0.5 * std::log(1 + std::exp(2.0)), 1e-5);
+}
+
+// A tiny task: classify whether a 16x16 image is bright on its left or right half.
+class HalvesTask : public TrainingTask {
+ public:
+  explicit HalvesTask(ResNet net) : net_(net) {
+    torch::manual_seed(3);
+    images_ = torch::rand({64, 1, 16, 16}) * 0.3;
+    labels_ = torch::randint(0, 2, {64}, torch::kLong);
+    for (int i = 0; i < 64; ++i) {
+      const int64_t half = labels_[i].item<int64_t>();
+      images_[i].narrow(2, half * 8, 8) += 0.7;
+    }
+  }
+  size_t NumTrain() const override { return 48; }
+  torch::Tensor TrainLoss(const std::vector<size_t>& indices, std::mt19937_64&) override {
+    auto idx = torch::tensor(std::vector<int64_t>(indices.begin(), indices.end()), torch::kLong);
+    return torch::cross_entropy_loss(net_->forward(images_.index_select(0, idx)), labels_.index_select(0, idx));
+  }
+  double Validate() override {
+    auto pred = net_->forward(images_.narrow(0, 48, 16)).argmax(1);
+    return pred.eq(labels_.narrow(0, 48, 16)).to(torch::kFloat64).mean().item<double>();
+  }
+  std::string MetricName() const override { return "accuracy"; }
+  void SaveBest() override { ++saved; }
+  int saved = 0;
+
+ private:
+  ResNet net_;
+  torch::Tensor images_, labels_;
+};
+
+TEST(Trainer, LossFallsAndResumes) {
+  TrainerOptions options;
+  options.max_epochs = 6;
+  options.patience = 100;
+  options.batch_size = 8;
+  options.progress = false;
+  options.state_dir = TempDir("resume");
+  SetUpTorch(options);
+  ResNet net(ResNetOptions{18, 4, 1, 2});
+  HalvesTask task(net);
+  torch::optim::Adam adam(net->parameters(), torch::optim::AdamOptions(1e-2));
+  TrainingRecord record = Train(task, *net, adam, options);
+  ASSERT_EQ(record.epochs_run, 6);
+  EXPECT_LT(record.train_loss.back(), record.train_loss.front());
+  EXPECT_GE(task.saved, 1);
+  // A second run with the same state folder and more epochs continues from epoch 6.
+  options.max_epochs = 7;
+  TrainingRecord resumed = Train(task, *net, adam, options);
+  EXPECT_EQ(resumed.epochs_run, 7);
+  EXPECT_EQ(resumed.train_loss.size(), 7u);
+  EXPECT_DOUBLE_EQ(resumed.train_loss[0], record.train_loss[0]);
+}
+
+TEST(Checkpoint, ReloadGivesIdenticalOutputsAndRejectsMismatch) {
+  const fs::path dir = TempDir("ckpt");
+  ResNetOptions arch{18, 4, 3, 7};
+  ResNet net(arch);
+  net->eval();
+  SaveCheckpoint(*net, {{"kind", "counter"}, {"architecture", arch.ToJson()}}, dir / "m.pt");
+
+  nlohmann::json header = ReadCheckpointHeader(dir / "m.pt", "counter");
+  ResNet loaded(ResNetOptions::FromJson(header["architecture"]));
+  LoadCheckpointWeights(*loaded, dir / "m.pt");
+  loaded->eval();
+  torch::Tensor x = torch::rand({2, 3, 40, 40});
+  EXPECT_TRUE(torch::equal(net->forward(x), loaded->forward(x)));
+
+  EXPECT_THROW(ReadCheckpointHeader(dir / "m.pt", "unet"), Error);
+  EXPECT_THROW(ReadCheckpointHeader(dir / "missing.pt", "counter"), Error);
+  std::ofstream(dir / "junk.pt") << "not a model";
+  EXPECT_THROW(ReadCheckpointHeader(dir / "junk.pt", "counter"), Error);
+  ResNet wider(ResNetOptions{18, 8, 3, 7});
+  EXPECT_THROW(LoadCheckpointWeights(*wider, dir / "m.pt"), Error);
+  UNet unet(UNetOptions{4});
+  EXPECT_THROW(LoadCheckpointWeights(*unet, dir / "m.pt"), Error);
+}
+
+}  // namespace
+}  // namespace orchard::nn

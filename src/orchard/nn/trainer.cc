@@ -1,0 +1,157 @@
+#include "orchard/nn/trainer.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <numeric>
+#include <thread>
+
+#include <unistd.h>
+
+#include "orchard/core/error.h"
+#include "orchard/core/file_io.h"
+
+namespace orchard::nn {
+namespace {
+
+void PrintProgress(int epoch, int max_epochs, size_t done, size_t total, double loss, bool tty) {
+  if (!tty) return;
+  const int width = 30;
+  const int filled = total ? static_cast<int>(width * done / total) : width;
+  std::fprintf(stderr, "\repoch %d/%d [%s%s] %3d%% loss %.4f", epoch, max_epochs, std::string(filled, '#').c_str(),
+               std::string(width - filled, '.').c_str(), total ? static_cast<int>(100 * done / total) : 100, loss);
+  std::fflush(stderr);
+}
+
+void SaveState(const fs::path& dir, torch::nn::Module& model, torch::optim::Optimizer& optimizer,
+               const TrainingRecord& record, const std::mt19937_64& rng) {
+  fs::create_directories(dir);
+  torch::serialize::OutputArchive model_archive;
+  model.save(model_archive);
+  WriteFileAtomic(dir / "model.pt", [&](const fs::path& tmp) { model_archive.save_to(tmp.string()); });
+  torch::serialize::OutputArchive optimizer_archive;
+  optimizer.save(optimizer_archive);
+  WriteFileAtomic(dir / "optimizer.pt", [&](const fs::path& tmp) { optimizer_archive.save_to(tmp.string()); });
+  std::ostringstream rng_state;
+  rng_state << rng;
+  nlohmann::json json = record.ToJson();
+  json["rng"] = rng_state.str();
+  // The record is written last: its presence means the state is complete.
+  WriteTextFileAtomic(dir / "record.json", json.dump(1));
+}
+
+bool LoadState(const fs::path& dir, torch::nn::Module& model, torch::optim::Optimizer& optimizer,
+               TrainingRecord* record, std::mt19937_64* rng) {
+  if (!fs::exists(dir / "record.json")) return false;
+  try {
+    const nlohmann::json json = nlohmann::json::parse(ReadTextFile(dir / "record.json"));
+    *record = TrainingRecord::FromJson(json);
+    std::istringstream rng_state(json.at("rng").get<std::string>());
+    rng_state >> *rng;
+    torch::serialize::InputArchive model_archive;
+    model_archive.load_from((dir / "model.pt").string());
+    model.load(model_archive);
+    torch::serialize::InputArchive optimizer_archive;
+    optimizer_archive.load_from((dir / "optimizer.pt").string());
+    optimizer.load(optimizer_archive);
+  } catch (const std::exception& e) {
+    Fail("cannot resume from ", dir.string(), " (delete it to start afresh): ", std::string(e.what()).substr(0, 200));
+  }
+  return true;
+}
+
+}  // namespace
+
+void TrainerOptions::Check() const {
+  ORCHARD_CHECK_OPTION(max_epochs >= 1, "max epochs must be at least 1, got ", max_epochs);
+  ORCHARD_CHECK_OPTION(patience >= 1, "patience must be at least 1, got ", patience);
+  ORCHARD_CHECK_OPTION(batch_size >= 1, "batch size must be at least 1, got ", batch_size);
+  ORCHARD_CHECK_OPTION(threads >= 0, "threads must be >= 0 (0 = all cores), got ", threads);
+}
+
+nlohmann::json TrainingRecord::ToJson() const {
+  return {{"epochs_run", epochs_run}, {"best_epoch", best_epoch}, {"best_metric", best_metric},
+          {"stopped_early", stopped_early}, {"seconds", seconds}, {"train_loss", train_loss},
+          {"validation", validation}};
+}
+
+TrainingRecord TrainingRecord::FromJson(const nlohmann::json& json) {
+  TrainingRecord r;
+  r.epochs_run = json.at("epochs_run");
+  r.best_epoch = json.at("best_epoch");
+  r.best_metric = json.at("best_metric");
+  r.stopped_early = json.at("stopped_early");
+  r.seconds = json.at("seconds");
+  r.train_loss = json.at("train_loss").get<std::vector<double>>();
+  r.validation = json.at("validation").get<std::vector<double>>();
+  return r;
+}
+
+void SetUpTorch(const TrainerOptions& options) {
+  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  at::set_num_threads(options.threads > 0 ? options.threads : cores);
+  torch::manual_seed(options.seed);
+}
+
+TrainingRecord Train(TrainingTask& task, torch::nn::Module& model, torch::optim::Optimizer& optimizer,
+                     const TrainerOptions& options) {
+  options.Check();
+  if (task.NumTrain() == 0) Fail("no training samples");
+  const bool tty = options.progress && ::isatty(2);
+  std::mt19937_64 rng(options.seed);
+  TrainingRecord record;
+  if (!options.state_dir.empty() && LoadState(options.state_dir, model, optimizer, &record, &rng)) {
+    std::fprintf(stderr, "resuming after epoch %d (best %s %.4f at epoch %d)\n", record.epochs_run,
+                 task.MetricName().c_str(), record.best_metric, record.best_epoch);
+  }
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<size_t> order(task.NumTrain());
+  std::iota(order.begin(), order.end(), 0);
+
+  while (record.epochs_run < options.max_epochs && !record.stopped_early) {
+    const int epoch = record.epochs_run + 1;
+    std::shuffle(order.begin(), order.end(), rng);
+    model.train();
+    double loss_sum = 0;
+    size_t batches = 0;
+    for (size_t begin = 0; begin < order.size(); begin += options.batch_size) {
+      const size_t end = std::min(order.size(), begin + options.batch_size);
+      std::vector<size_t> indices(order.begin() + begin, order.begin() + end);
+      optimizer.zero_grad();
+      torch::Tensor loss = task.TrainLoss(indices, rng);
+      if (!std::isfinite(loss.item<double>())) Fail("training diverged: the loss is not finite at epoch ", epoch);
+      loss.backward();
+      optimizer.step();
+      loss_sum += loss.item<double>();
+      ++batches;
+      PrintProgress(epoch, options.max_epochs, end, order.size(), loss_sum / batches, tty);
+    }
+    model.eval();
+    double metric;
+    {
+      torch::NoGradGuard no_grad;
+      metric = task.Validate();
+    }
+    record.epochs_run = epoch;
+    record.train_loss.push_back(loss_sum / std::max<size_t>(1, batches));
+    record.validation.push_back(metric);
+    const bool improved = record.best_epoch == 0 || metric > record.best_metric;
+    if (improved) {
+      record.best_metric = metric;
+      record.best_epoch = epoch;
+      task.SaveBest();
+    }
+    if (epoch - record.best_epoch >= options.patience) record.stopped_early = true;
+    if (options.progress) {
+      if (tty) std::fputc('\r', stderr);
+      std::fprintf(stderr, "epoch %d/%d loss %.4f %s %.4f%s\n", epoch, options.max_epochs, record.train_loss.back(),
+                   task.MetricName().c_str(), metric, improved ? " (best)" : "");
+    }
+    record.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (!options.state_dir.empty()) SaveState(options.state_dir, model, optimizer, record, rng);
+  }
+  record.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return record;
+}
+
+}  // namespace orchard::nn

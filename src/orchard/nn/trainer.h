@@ -1,0 +1,69 @@
+// The training loop shared by every network: shuffled mini-batches, validation
+// after each epoch, early stopping on the validation metric, the best model
+// kept, resumable state, a progress bar, a fixed seed and all cores in use.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+#include <torch/torch.h>
+
+namespace orchard::nn {
+
+namespace fs = std::filesystem;
+
+struct TrainerOptions {
+  int max_epochs = 50;   // upper bound on passes over the training set
+  int patience = 5;      // stop after this many epochs without a better validation metric
+  int batch_size = 16;
+  uint64_t seed = 0;     // shuffling, augmentation and weight initialisation
+  int threads = 0;       // LibTorch intra-op threads; 0 = all cores of the machine
+  // Folder for the resumable state (model, optimiser, record after each epoch);
+  // empty = no resume. A run with the same folder continues where it stopped.
+  fs::path state_dir;
+  bool progress = true;  // progress bar on stderr
+
+  void Check() const;
+};
+
+// What a training run needs from its data and its model.
+class TrainingTask {
+ public:
+  virtual ~TrainingTask() = default;
+  virtual size_t NumTrain() const = 0;
+  // Loss of one training batch (the model in training mode); the trainer
+  // back-propagates and steps the optimiser.
+  virtual torch::Tensor TrainLoss(const std::vector<size_t>& indices, std::mt19937_64& rng) = 0;
+  // Metric over the whole validation set, higher is better (model in eval
+  // mode, gradients off).
+  virtual double Validate() = 0;
+  virtual std::string MetricName() const = 0;
+  // Called when the validation metric improves: keep this model.
+  virtual void SaveBest() = 0;
+};
+
+struct TrainingRecord {
+  int epochs_run = 0;
+  int best_epoch = 0;  // 1-based; 0 when no epoch ran
+  double best_metric = -1e300;
+  bool stopped_early = false;
+  double seconds = 0;  // wall time of this run (not counting earlier resumed runs)
+  std::vector<double> train_loss;  // mean per epoch
+  std::vector<double> validation;  // metric per epoch
+
+  nlohmann::json ToJson() const;
+  static TrainingRecord FromJson(const nlohmann::json& json);
+};
+
+// Uses options.threads cores and seeds LibTorch; call before building a model
+// so its initial weights follow the seed.
+void SetUpTorch(const TrainerOptions& options);
+
+TrainingRecord Train(TrainingTask& task, torch::nn::Module& model, torch::optim::Optimizer& optimizer,
+                     const TrainerOptions& options);
+
+}  // namespace orchard::nn
