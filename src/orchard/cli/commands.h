@@ -10,6 +10,7 @@ class App;
 namespace orchard {
 
 // --- registered commands (one line each; keep in data-flow order) ---
+void AddConvertCommand(CLI::App& app);  // orchard convert: dataset formats
 // (none yet)
 
 }  // namespace orchard
