@@ -1,0 +1,154 @@
+#include "orchard/detect/gmm/gmm_detector.h"
+
+#include <filesystem>
+#include <random>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include "orchard/core/error.h"
+#include "orchard/core/file_io.h"
+#include "orchard/data/dataset.h"
+
+namespace orchard {
+namespace {
+
+struct Scene {
+  cv::Mat bgr;
+  std::vector<Box> apples;
+};
+
+// Red discs (apples) on green foliage with brown stripes and noise.
+Scene RedDiscsOnGreen(unsigned seed, int w = 320, int h = 240) {
+  std::mt19937 rng(seed);
+  Scene s;
+  s.bgr = cv::Mat(h, w, CV_8UC3, cv::Scalar(40, 130, 60));
+  cv::line(s.bgr, {0, h / 4}, {w, h / 2}, cv::Scalar(40, 60, 90), 6);
+  const std::vector<cv::Point> centres = {{60, 60}, {200, 70}, {120, 170}, {260, 180}};
+  for (const cv::Point& c : centres) {
+    const int r = 18 + static_cast<int>(rng() % 6);
+    cv::circle(s.bgr, c, r, cv::Scalar(35, 35, 190), cv::FILLED);
+    s.apples.push_back({double(c.x - r), double(c.y - r), double(c.x + r + 1), double(c.y + r + 1)});
+  }
+  cv::Mat noise(h, w, CV_8UC3);
+  cv::RNG cvrng(seed);
+  cvrng.fill(noise, cv::RNG::NORMAL, 0, 8);
+  cv::Mat noisy;
+  s.bgr.convertTo(noisy, CV_16SC3);
+  cv::Mat n16;
+  noise.convertTo(n16, CV_16SC3);
+  noisy += n16;
+  noisy.convertTo(s.bgr, CV_8UC3);
+  return s;
+}
+
+class GmmDetectorTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("orchard_gmm_test_" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+    for (int i = 0; i < 2; ++i) {
+      scenes_.push_back(RedDiscsOnGreen(i + 1));
+      images_.push_back(dir_ / ("train_" + std::to_string(i) + ".png"));
+      WriteImageAtomic(images_.back(), scenes_.back().bgr);
+    }
+    options_.num_classes = 5;
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  void ExpectFindsTheDiscs(const ColourModel& model, bool reference) {
+    GmmDetectorOptions options;
+    options.reference_slic = reference;
+    GmmDetector detector(model, options);
+    const Scene test = RedDiscsOnGreen(42);
+    const FrameDetection d = detector.Detect(test.bgr);
+    ASSERT_EQ(d.blobs.size(), test.apples.size());
+    for (const Box& apple : test.apples) {
+      double best = 0;
+      for (const Blob& b : d.blobs) best = std::max(best, IoU(apple, b.box));
+      EXPECT_GT(best, 0.75);
+    }
+    for (const Blob& b : d.blobs) {
+      EXPECT_GT(b.score, 0.5);
+      EXPECT_LE(b.score, 1.0);
+      EXPECT_EQ(d.labels(static_cast<int>(b.centroid.y), static_cast<int>(b.centroid.x)), b.id);
+    }
+    EXPECT_EQ(d.mask.size(), test.bgr.size());
+  }
+
+  fs::path dir_;
+  std::vector<Scene> scenes_;
+  std::vector<fs::path> images_;
+  ColourTrainingOptions options_;
+};
+
+TEST_F(GmmDetectorTest, UserSupervisedFromClicksFindsRedDiscs) {
+  const std::vector<Click> clicks = {{"train_0.png", 60, 60}, {"train_1", 200, 70}};
+  const ColourModel model = TrainColourModelFromClicks(images_, clicks, options_);
+  EXPECT_GE(model.NumApple(), 1);
+  ExpectFindsTheDiscs(model, false);
+  ExpectFindsTheDiscs(model, true);
+}
+
+TEST_F(GmmDetectorTest, SemiSupervisedFromAnnotationsFindsRedDiscs) {
+  Dataset train;
+  for (size_t i = 0; i < images_.size(); ++i) {
+    AnnotatedImage image;
+    image.name = images_[i].filename().string();
+    image.path = images_[i];
+    image.width = 320;
+    image.height = 240;
+    for (const Box& b : scenes_[i].apples) image.objects.push_back({b});
+    train.images.push_back(image);
+  }
+  const ColourModel model = TrainColourModelFromAnnotations(train, options_);
+  ExpectFindsTheDiscs(model, false);
+}
+
+TEST_F(GmmDetectorTest, ModelFileRoundTripAndBadFiles) {
+  const ColourModel model = TrainColourModelFromClicks(images_, {{"train_0.png", 60, 60}}, options_);
+  const fs::path path = dir_ / "model.json";
+  WriteColourModel(model, path);
+  const ColourModel back = ReadColourModel(path);
+  EXPECT_EQ(back.apple, model.apple);
+  EXPECT_NEAR(back.mixture.components[2].mean[1], model.mixture.components[2].mean[1], 1e-9);
+
+  std::string text = ReadTextFile(path);
+  const size_t at = text.find("\"version\": 1");
+  ASSERT_NE(at, std::string::npos);
+  WriteTextFileAtomic(dir_ / "v2.json", text.substr(0, at) + "\"version\": 2" + text.substr(at + 12));
+  try {
+    ReadColourModel(dir_ / "v2.json");
+    FAIL() << "a version-2 model was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("version"), std::string::npos) << e.what();
+  }
+  WriteTextFileAtomic(dir_ / "corrupt.json", text.substr(0, text.size() / 2));
+  EXPECT_THROW(ReadColourModel(dir_ / "corrupt.json"), Error);
+  EXPECT_THROW(ReadColourModel(dir_ / "missing.json"), Error);
+}
+
+TEST_F(GmmDetectorTest, BadInputGivesClearErrors) {
+  // A click on an image that is not among the training images, or outside it.
+  EXPECT_THROW(TrainColourModelFromClicks(images_, {{"nope.png", 5, 5}}, options_), Error);
+  EXPECT_THROW(TrainColourModelFromClicks(images_, {{"train_0.png", 500, 5}}, options_), Error);
+  EXPECT_THROW(TrainColourModelFromClicks(images_, {}, options_), Error);
+  WriteTextFileAtomic(dir_ / "clicks.json", "[]");
+  EXPECT_THROW(ReadClicks(dir_ / "clicks.json"), Error);
+  WriteTextFileAtomic(dir_ / "clicks.json", "{\"image\": 3}");
+  EXPECT_THROW(ReadClicks(dir_ / "clicks.json"), Error);
+  // An empty image.
+  const ColourModel model = TrainColourModelFromClicks(images_, {{"train_0.png", 60, 60}}, options_);
+  GmmDetector detector(model, {});
+  EXPECT_THROW(detector.Detect(cv::Mat()), Error);
+  // Annotations without apples: no apple class.
+  Dataset empty;
+  AnnotatedImage image;
+  image.name = "train_0.png";
+  image.path = images_[0];
+  empty.images.push_back(image);
+  EXPECT_THROW(TrainColourModelFromAnnotations(empty, options_), Error);
+}
+
+}  // namespace
+}  // namespace orchard
