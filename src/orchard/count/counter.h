@@ -1,0 +1,31 @@
+// The counting stage's interface: how many apples are in one blob (a cluster
+// of fruit pixels found by a detector), and where. Implemented by the GMM
+// counter here and by the CNN counter.
+#pragma once
+
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+namespace orchard {
+
+struct Fruit {
+  cv::Point2d centre;  // in the patch's pixel coordinates
+  double radius = 0;   // pixels
+};
+
+struct BlobCount {
+  int count = 0;
+  std::vector<Fruit> fruits;  // one per counted apple (may be empty for counters that only count)
+};
+
+class Counter {
+ public:
+  virtual ~Counter() = default;
+  // `bgr_patch`: the blob's image patch (8-bit BGR); `fruit_mask`: its fruit
+  // pixels (non-zero), same size, or empty when the counter must find them
+  // itself. Throws orchard::Error on an empty patch or mismatched sizes.
+  virtual BlobCount Count(const cv::Mat& bgr_patch, const cv::Mat1b& fruit_mask) = 0;
+};
+
+}  // namespace orchard

@@ -1,0 +1,99 @@
+#include "orchard/count/gmm_counter.h"
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include <Eigen/LU>
+
+#include "orchard/core/error.h"
+#include "orchard/detect/gmm/gmm_detector.h"
+
+namespace orchard {
+
+ModelSelection ParseModelSelection(const std::string& name) {
+  if (name == "bic") return ModelSelection::kBic;
+  if (name == "aic") return ModelSelection::kAic;
+  Fail("unknown model-selection criterion '", name, "' (use bic or aic)");
+}
+
+void GmmCounterOptions::Check() const {
+  ORCHARD_CHECK_OPTION(max_fruits >= 1, "max_fruits must be >= 1, got ", max_fruits);
+  ORCHARD_CHECK_OPTION(restarts >= 1, "restarts must be >= 1, got ", restarts);
+  ORCHARD_CHECK_OPTION(max_points >= 10, "max_points must be >= 10, got ", max_points);
+  ORCHARD_CHECK_OPTION(min_points_per_fruit >= 3, "min_points_per_fruit must be >= 3, got ", min_points_per_fruit);
+}
+
+GmmCounter::GmmCounter(const GmmCounterOptions& options, std::shared_ptr<const ColourModel> colour_model)
+    : options_(options), colour_model_(std::move(colour_model)) {
+  options_.Check();
+}
+
+cv::Mat1b ColourFruitMask(const cv::Mat& bgr_patch, const ColourModel& model) {
+  GmmDetectorOptions options;
+  options.blobs.min_pixels = 1;
+  GmmDetector detector(model, options);
+  return detector.Detect(bgr_patch).mask;
+}
+
+BlobCount GmmCounter::Count(const cv::Mat& bgr_patch, const cv::Mat1b& fruit_mask) {
+  if (bgr_patch.empty()) Fail("cannot count apples in an empty patch");
+  cv::Mat1b mask = fruit_mask;
+  if (mask.empty()) {
+    if (!colour_model_) Fail("the GMM counter needs a fruit mask or a colour model to find the fruit pixels");
+    mask = ColourFruitMask(bgr_patch, *colour_model_);
+  }
+  if (mask.size() != bgr_patch.size()) Fail("fruit mask and patch differ in size");
+  std::vector<cv::Point> pixels;
+  cv::findNonZero(mask, pixels);
+  BlobCount result;
+  if (static_cast<int>(pixels.size()) < 2 * options_.min_points_per_fruit) {
+    // No (usable) fruit pixels: still one apple, as the detector reported a blob.
+    result.count = 1;
+    result.fruits.push_back({{0.5 * (bgr_patch.cols - 1), 0.5 * (bgr_patch.rows - 1)},
+                             0.25 * (bgr_patch.cols + bgr_patch.rows)});
+    return result;
+  }
+  const int n = std::min<int>(options_.max_points, static_cast<int>(pixels.size()));
+  Eigen::MatrixXd x(n, 2);
+  // A seeded random subsample: a strided one aliases with the pixel grid.
+  std::mt19937_64 rng(options_.seed);
+  if (n < static_cast<int>(pixels.size())) {
+    for (int i = 0; i < n; ++i)
+      std::swap(pixels[i], pixels[i + std::uniform_int_distribution<size_t>(0, pixels.size() - 1 - i)(rng)]);
+  }
+  for (int i = 0; i < n; ++i) {
+    const cv::Point& p = pixels[i];
+    x(i, 0) = p.x;
+    x(i, 1) = p.y;
+  }
+  const int k_max = std::max(1, std::min(options_.max_fruits, n / options_.min_points_per_fruit));
+  double best_score = std::numeric_limits<double>::infinity();
+  GaussianMixture best;
+  for (int k = 1; k <= k_max; ++k) {
+    GaussianMixtureOptions em;
+    em.num_components = k;
+    em.regularization = 0.25;  // pixels^2: a pixel-quantised blob never has zero spread
+    em.max_iterations = 100;
+    em.tolerance = 1e-5;
+    // EM finds local optima: keep the best of a few seeded starts.
+    GaussianMixtureFit fit;
+    fit.log_likelihood = -std::numeric_limits<double>::infinity();
+    for (int start = 0; start < options_.restarts; ++start) {
+      em.seed = options_.seed + start;
+      GaussianMixtureFit f = FitGaussianMixture(x, em);
+      if (f.log_likelihood > fit.log_likelihood) fit = f;
+    }
+    const double score = options_.criterion == ModelSelection::kBic ? fit.Bic() : fit.Aic();
+    if (score < best_score) best_score = score, best = fit.mixture;
+  }
+  result.count = best.NumComponents();
+  for (const Gaussian& g : best.components) {
+    // A uniform disc of radius r has variance r^2 / 4 along each axis.
+    const double r = 2.0 * std::sqrt(std::sqrt(std::max(0.0, g.covariance.determinant())));
+    result.fruits.push_back({{g.mean[0], g.mean[1]}, r});
+  }
+  return result;
+}
+
+}  // namespace orchard

@@ -1,0 +1,47 @@
+#include "orchard/count/gmm_counter.h"
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include "orchard/core/error.h"
+
+namespace orchard {
+namespace {
+
+// A blob of `centres.size()` touching/separate discs of radius r.
+cv::Mat1b Discs(const std::vector<cv::Point>& centres, int r, cv::Size size = {160, 120}) {
+  cv::Mat1b mask(size, uchar(0));
+  for (const cv::Point& c : centres) cv::circle(mask, c, r, 255, cv::FILLED);
+  return mask;
+}
+
+TEST(GmmCounter, CountsDiscsInABlob) {
+  GmmCounter counter({});
+  const cv::Mat patch(120, 160, CV_8UC3, cv::Scalar(0, 0, 200));
+  for (int r : {10, 20, 30}) {
+    EXPECT_EQ(counter.Count(patch, Discs({{80, 60}}, r)).count, 1) << r;
+    EXPECT_EQ(counter.Count(patch, Discs({{80 - r, 60}, {80 + r, 60}}, r)).count, 2) << r;  // touching pair
+  }
+  EXPECT_EQ(counter.Count(patch, Discs({{30, 30}, {130, 30}, {80, 95}}, 12)).count, 3);  // separate discs
+  const BlobCount one = counter.Count(patch, Discs({{70, 50}}, 25));
+  ASSERT_EQ(one.fruits.size(), 1u);
+  EXPECT_NEAR(one.fruits[0].centre.x, 70, 3.0);
+  EXPECT_NEAR(one.fruits[0].centre.y, 50, 3.0);
+  EXPECT_NEAR(one.fruits[0].radius, 25, 3.0);
+}
+
+TEST(GmmCounter, EmptyBlobCountsAsOneAndBadInputThrows) {
+  GmmCounter counter({});
+  const cv::Mat patch(40, 40, CV_8UC3, cv::Scalar(0, 200, 0));
+  EXPECT_EQ(counter.Count(patch, cv::Mat1b(40, 40, uchar(0))).count, 1);
+  EXPECT_THROW(counter.Count(cv::Mat(), cv::Mat1b()), Error);
+  EXPECT_THROW(counter.Count(patch, cv::Mat1b(10, 10, uchar(0))), Error);
+  EXPECT_THROW(counter.Count(patch, cv::Mat1b()), Error);  // no mask and no colour model
+  EXPECT_THROW(ParseModelSelection("bogus"), Error);
+  GmmCounterOptions bad;
+  bad.max_fruits = 0;
+  EXPECT_THROW(bad.Check(), Error);
+}
+
+}  // namespace
+}  // namespace orchard
