@@ -74,8 +74,13 @@ Dataset ReadDataset(const fs::path& path, std::optional<DatasetFormat> format = 
 // one instance id per apple (8- or 16-bit), 0 = background. Boxes are the
 // tight pixel bounds [xmin, xmax+1) of each id, areas the pixel counts.
 Dataset ReadMinneApple(const fs::path& dir);
+// Without images/, the masks alone are read (names = mask file names, no
+// paths). An image without a mask, a mask without an image, or a size
+// mismatch is an error. Polygons are the outer contours of each instance
+// (see minneapple.h).
 // Writes images (copied from their paths) and masks rasterised from polygons
-// (or filled boxes when an object has no polygon) as 16-bit PNG.
+// (or filled boxes when an object has no polygon) as 16-bit PNG; holes inside
+// an instance are not kept (polygons have none).
 void WriteMinneApple(const Dataset& dataset, const fs::path& dir);
 // Reads one instance mask as CV_32S ids; throws when unreadable or multi-channel
 // in a way that cannot be ids.
@@ -83,13 +88,26 @@ cv::Mat ReadInstanceMask(const fs::path& path);
 
 // YOLO: `dir/images/` and `dir/labels/<stem>.txt` (also accepted under
 // `dir/data/`), lines `class cx cy w h` normalised to [0,1]. An image without a
-// label file has no objects. Image sizes are read from the image files.
+// label file has no objects; a label file without an image is an error
+// (except labels.txt / classes.txt, class-name lists). Lines with a class and 3
+// or more `x y` pairs (YOLO segmentation) become polygons. Values outside
+// [0,1] by more than 1e-3, boxes reaching outside the image by more than 1%,
+// negative sizes, NaN: errors naming file, line and field. Image sizes are
+// read from the image files.
 Dataset ReadYolo(const fs::path& dir);
 // Writes `dir/labels/*.txt` (and `dir/images/` copies when the source paths exist).
 void WriteYolo(const Dataset& dataset, const fs::path& dir);
 
 // COCO json: images, annotations (bbox [x,y,w,h], optional polygon
 // segmentation, area), categories. All categories are treated as apple.
+// Image names drop any folder in file_name; ids are kept as in the file.
+// Crowd annotations (iscrowd=1) are rejected; RLE segmentations keep only their
+// area. Note: the per-image json files of AppleBBCH81 store the box CENTRE in
+// bbox[0..1] (their YOLO labels are right); read the YOLO folder instead.
+// WriteCoco writes info, licenses, images, annotations (id, image_id,
+// category_id=1, bbox, area = pixel/polygon area or box area, iscrowd=0,
+// segmentation only when polygons exist) and categories [{id:1,name:"apple"}];
+// image ids are kept when positive and unique, else 1..N.
 Dataset ReadCoco(const fs::path& json_path, const fs::path& image_dir = {});
 void WriteCoco(const Dataset& dataset, const fs::path& json_path);
 
@@ -108,8 +126,10 @@ struct ScoredBox {
 using Predictions = std::map<std::string, std::vector<ScoredBox>>;
 
 // CodaLab/MinneApple detection results: lines `name,x1,y1,x2,y2,score`; an
-// optional header line is skipped.
+// optional header line (a first line with no number after the name) is skipped.
 Predictions ReadCodaLabDetections(const fs::path& path);
+// Writes no header line: the MinneApple CodaLab servers expect data lines only.
+// Images appear in name order, each image's boxes in the given order.
 void WriteCodaLabDetections(const Predictions& predictions, const fs::path& path);
 
 // COCO results json: [{"image_id", "bbox": [x,y,w,h], "score"}, ...]. Image ids
@@ -127,6 +147,7 @@ struct ImageCount {
   int count = 0;
 };
 std::vector<ImageCount> ReadCodaLabCounts(const fs::path& path);
+// Writes no header line (as for detections), counts in the given order.
 void WriteCodaLabCounts(const std::vector<ImageCount>& counts, const fs::path& path);
 
 }  // namespace orchard

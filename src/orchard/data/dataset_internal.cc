@@ -6,6 +6,7 @@
 
 #include "orchard/core/error.h"
 #include "orchard/core/file_io.h"
+#include "orchard/data/image_size.h"
 
 namespace orchard {
 namespace data_internal {
@@ -34,10 +35,7 @@ fs::path ResolveImagePath(const fs::path& image_dir, const std::string& file_nam
   return {};
 }
 
-cv::Size ReadImageSize(const fs::path& path) {
-  const cv::Mat image = ReadImage(path, -1 /* IMREAD_UNCHANGED */);
-  return image.size();
-}
+cv::Size ReadImageSize(const fs::path& path) { return ReadImageSizeFast(path); }
 
 void CopyFileAtomic(const fs::path& from, const fs::path& to) {
   std::error_code ec;

@@ -35,7 +35,8 @@ fs::path GuessImageDir(const fs::path& json_path);
 fs::path ResolveImagePath(const fs::path& image_dir, const std::string& file_name, bool required,
                           const fs::path& source);
 
-// Width and height of an image file (decoded once); throws naming the file.
+// Width and height of an image file (from its header when PNG/JPEG, see
+// image_size.h); throws naming the file.
 cv::Size ReadImageSize(const fs::path& path);
 
 // Copies `from` to `to` atomically (skips when they are the same file).
