@@ -11,6 +11,7 @@ namespace orchard {
 
 // --- registered commands (one line each; keep in data-flow order) ---
 void AddConvertCommand(CLI::App& app);  // orchard convert: dataset formats
+void AddSynthCommand(CLI::App& app);    // orchard synth: synthetic rows with ground truth
 void AddEvalCommand(CLI::App& app);     // orchard eval: detection/segmentation/count/yield metrics
 // (none yet)
 

@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
 
   // --- subcommands (one line each) ---
   orchard::AddConvertCommand(app);
+  orchard::AddSynthCommand(app);
   orchard::AddEvalCommand(app);
 
   try {
