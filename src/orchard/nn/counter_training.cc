@@ -1,0 +1,190 @@
+#include "orchard/nn/counter_training.h"
+
+#include <algorithm>
+#include <map>
+#include <regex>
+#include <set>
+
+#include "orchard/core/error.h"
+#include "orchard/core/file_io.h"
+#include "orchard/data/split.h"
+#include "orchard/nn/checkpoint.h"
+
+namespace orchard::nn {
+namespace {
+
+constexpr int kClasses = 7;
+
+class CounterTask : public TrainingTask {
+ public:
+  CounterTask(ResNet net, const CounterTrainingOptions& options, std::vector<cv::Mat> train_images,
+              std::vector<int> train_labels, std::vector<cv::Mat> val_images, std::vector<int> val_labels,
+              std::function<void()> save_best)
+      : net_(net),
+        options_(options),
+        train_images_(std::move(train_images)),
+        train_labels_(std::move(train_labels)),
+        val_images_(std::move(val_images)),
+        val_labels_(std::move(val_labels)),
+        save_best_(std::move(save_best)) {
+    // Balance classes by up-sampling: every class is repeated to the size of the largest.
+    std::map<int, std::vector<size_t>> by_class;
+    for (size_t i = 0; i < train_labels_.size(); ++i) by_class[train_labels_[i]].push_back(i);
+    size_t largest = 0;
+    for (auto& [label, members] : by_class) largest = std::max(largest, members.size());
+    for (auto& [label, members] : by_class) {
+      for (size_t k = 0; k < largest; ++k) balanced_.push_back(members[k % members.size()]);
+    }
+  }
+  size_t NumTrain() const override { return balanced_.size(); }
+  torch::Tensor TrainLoss(const std::vector<size_t>& indices, std::mt19937_64& rng) override {
+    std::vector<cv::Mat> images;
+    std::vector<int64_t> labels;
+    for (size_t i : indices) {
+      const size_t sample = balanced_[i];
+      images.push_back(AugmentPatch(train_images_[sample], options_.augmentation, rng));
+      labels.push_back(train_labels_[sample]);
+    }
+    return torch::cross_entropy_loss(net_->forward(ImagesToTensor(images)), torch::tensor(labels, torch::kLong));
+  }
+  double Validate() override {
+    if (val_images_.empty()) return 0;
+    int correct = 0;
+    for (size_t begin = 0; begin < val_images_.size(); begin += 64) {
+      const size_t end = std::min(val_images_.size(), begin + 64);
+      std::vector<cv::Mat> batch(val_images_.begin() + begin, val_images_.begin() + end);
+      torch::Tensor predicted = net_->forward(ImagesToTensor(batch)).argmax(1);
+      for (size_t i = begin; i < end; ++i) correct += predicted[i - begin].item<int64_t>() == val_labels_[i];
+    }
+    return static_cast<double>(correct) / val_images_.size();
+  }
+  std::string MetricName() const override { return "val_accuracy"; }
+  void SaveBest() override { save_best_(); }
+
+ private:
+  ResNet net_;
+  const CounterTrainingOptions& options_;
+  std::vector<cv::Mat> train_images_;
+  std::vector<int> train_labels_;
+  std::vector<cv::Mat> val_images_;
+  std::vector<int> val_labels_;
+  std::vector<size_t> balanced_;
+  std::function<void()> save_best_;
+};
+
+}  // namespace
+
+std::string PatchPhotoId(const std::string& patch_name) {
+  static const std::regex kPatchSuffix("_p[0-9]+$");
+  return PhotoId(std::regex_replace(fs::path(patch_name).stem().string(), kPatchSuffix, ""));
+}
+
+std::vector<LabelledPatch> ReadPatchFolder(const fs::path& dir) {
+  const fs::path counts_file = dir / "counts.csv";
+  std::error_code ec;
+  if (!fs::is_regular_file(counts_file, ec)) Fail("no counts.csv in patch folder ", dir.string());
+  std::vector<LabelledPatch> patches;
+  for (const ImageCount& entry : ReadCodaLabCounts(counts_file)) {
+    if (entry.count < 0 || entry.count >= kClasses) {
+      Fail(counts_file.string(), ": count of ", entry.name, " is ", entry.count, ", the counter knows 0..6");
+    }
+    patches.push_back({ReadImage(dir / entry.name), entry.count, PatchPhotoId(entry.name)});
+  }
+  if (patches.empty()) Fail("patch folder ", dir.string(), " has no patches");
+  return patches;
+}
+
+std::vector<LabelledPatch> CutDatasetPatches(const Dataset& dataset, const CountPatchOptions& options) {
+  std::vector<LabelledPatch> patches;
+  std::string current;
+  cv::Mat image;
+  for (const CountPatch& patch : MakeCountPatches(dataset, options)) {
+    if (patch.image != current) {
+      const AnnotatedImage* source = dataset.Find(patch.image);
+      if (!source || source->path.empty()) Fail("no image file for ", patch.image);
+      image = ReadImage(source->path);
+      current = patch.image;
+    }
+    patches.push_back({image(patch.crop & cv::Rect(0, 0, image.cols, image.rows)).clone(), patch.count,
+                       PhotoId(patch.image)});
+  }
+  return patches;
+}
+
+void CounterTrainingOptions::Check() const {
+  architecture.Check();
+  trainer.Check();
+  ORCHARD_CHECK_OPTION(architecture.num_classes == kClasses, "the counter has 7 classes (0..6), got ",
+                       architecture.num_classes);
+  ORCHARD_CHECK_OPTION(input_size >= 32 && input_size <= 512, "input size must be in [32, 512], got ", input_size);
+  ORCHARD_CHECK_OPTION(learning_rate > 0, "learning rate must be positive, got ", learning_rate);
+  ORCHARD_CHECK_OPTION(validation_fraction > 0 && validation_fraction < 1, "validation fraction must be in (0, 1), got ",
+                       validation_fraction);
+}
+
+CounterTrainingResult TrainCounter(const std::vector<LabelledPatch>& patches, const CounterTrainingOptions& options,
+                                   const nlohmann::json& data_description, const fs::path& model_path) {
+  options.Check();
+  if (patches.empty()) Fail("no training patches");
+  // Validation photos: a seeded choice among the sorted photo ids.
+  std::set<std::string> photo_set;
+  for (const LabelledPatch& p : patches) photo_set.insert(p.photo);
+  Dataset photos;
+  for (const std::string& photo : photo_set) {
+    AnnotatedImage image;
+    image.name = photo + "_0";  // PhotoId(name) == photo
+    photos.images.push_back(image);
+  }
+  std::set<std::string> val_photos;
+  if (photo_set.size() >= 2) {
+    const DatasetSplit split = SplitByPhoto(photos, options.validation_fraction, options.split_seed);
+    val_photos.insert(split.test_photos.begin(), split.test_photos.end());
+  }
+
+  CounterTrainingResult result;
+  result.train_class_counts.assign(kClasses, 0);
+  std::vector<cv::Mat> train_images, val_images;
+  std::vector<int> train_labels, val_labels;
+  for (const LabelledPatch& p : patches) {
+    cv::Mat input = LetterboxPatch(p.bgr, options.input_size);
+    if (val_photos.count(p.photo)) {
+      val_images.push_back(input);
+      val_labels.push_back(p.count);
+    } else {
+      train_images.push_back(input);
+      train_labels.push_back(p.count);
+      ++result.train_class_counts[p.count];
+    }
+  }
+  if (train_images.empty()) Fail("every patch fell in the validation split: give more photos");
+  result.train_patches = static_cast<int>(train_images.size());
+  result.validation_patches = static_cast<int>(val_images.size());
+
+  SetUpTorch(options.trainer);
+  ResNet net(options.architecture);
+  nlohmann::json header = {{"kind", "counter"},
+                           {"architecture", options.architecture.ToJson()},
+                           {"input_size", options.input_size},
+                           {"data", data_description},
+                           {"train_patches", result.train_patches},
+                           {"validation_patches", result.validation_patches},
+                           {"train_class_counts", result.train_class_counts}};
+  // The best epoch goes to a side file, so an interrupted run leaves an earlier
+  // model at `model_path` untouched.
+  const fs::path best_path = model_path.parent_path() / ("." + model_path.filename().string() + ".best");
+  auto save_best = [&] { SaveCheckpoint(*net, header, best_path); };
+  CounterTask task(net, options, std::move(train_images), std::move(train_labels), std::move(val_images),
+                   std::move(val_labels), save_best);
+  torch::optim::Adam adam(net->parameters(),
+                          torch::optim::AdamOptions(options.learning_rate).betas(std::make_tuple(0.9, 0.999)));
+  result.record = Train(task, *net, adam, options.trainer);
+  // Keep the best epoch's weights, now with the whole training record in the header.
+  LoadCheckpointWeights(*net, best_path);
+  header["training"] = result.record.ToJson();
+  SaveCheckpoint(*net, header, model_path);
+  std::error_code ec;
+  fs::remove(best_path, ec);
+  return result;
+}
+
+}  // namespace orchard::nn
