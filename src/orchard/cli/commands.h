@@ -13,6 +13,9 @@ namespace orchard {
 void AddConvertCommand(CLI::App& app);  // orchard convert: dataset formats
 void AddSynthCommand(CLI::App& app);    // orchard synth: synthetic rows with ground truth
 void AddEvalCommand(CLI::App& app);     // orchard eval: detection/segmentation/count/yield metrics
+void AddTrainCommand(CLI::App& app);    // orchard train gmm: colour model of the GMM detector
+void AddDetectCommand(CLI::App& app);   // orchard detect: fruit masks, blobs, detections
+void AddCountCommand(CLI::App& app);    // orchard count: apples per blob
 // (none yet)
 
 }  // namespace orchard

@@ -19,6 +19,9 @@ int main(int argc, char** argv) {
   orchard::AddConvertCommand(app);
   orchard::AddSynthCommand(app);
   orchard::AddEvalCommand(app);
+  orchard::AddTrainCommand(app);
+  orchard::AddDetectCommand(app);
+  orchard::AddCountCommand(app);
 
   try {
     app.parse(argc, argv);

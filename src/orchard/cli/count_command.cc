@@ -1,0 +1,104 @@
+// `orchard count`: apples per blob (and per image) from detected blobs, or per
+// patch from a folder of blob patches.
+#include <map>
+#include <sstream>
+
+#include <CLI/CLI.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <spdlog/spdlog.h>
+
+#include "orchard/cli/commands.h"
+#include "orchard/core/error.h"
+#include "orchard/core/file_io.h"
+#include "orchard/count/gmm_counter.h"
+#include "orchard/data/dataset.h"
+#include "orchard/detect/detector.h"
+
+namespace orchard {
+namespace {
+
+void AppendFruits(const std::string& name, int blob_id, const BlobCount& c, double ox, double oy,
+                  std::ostringstream* out) {
+  for (size_t i = 0; i < c.fruits.size(); ++i) {
+    *out << name << ',' << blob_id << ',' << i + 1 << ',' << c.fruits[i].centre.x + ox << ','
+         << c.fruits[i].centre.y + oy << ',' << c.fruits[i].radius << '\n';
+  }
+}
+
+}  // namespace
+
+void AddCountCommand(CLI::App& app) {
+  CLI::App* cmd = app.add_subcommand(
+      "count", "Count apples per blob: counts.csv (name,count per image) and fruits.csv beside it");
+  struct Args {
+    std::string method = "gmm", images, blobs, masks, in, model, out, criterion = "bic";
+    GmmCounterOptions options;
+  };
+  auto args = std::make_shared<Args>();
+  cmd->add_option("--method", args->method, "Counter: gmm")->capture_default_str();
+  cmd->add_option("--images", args->images, "Folder of the frames the blobs were detected in");
+  cmd->add_option("--blobs", args->blobs, "blobs.csv from `orchard detect`");
+  cmd->add_option("--masks", args->masks, "Instance masks from `orchard detect` (default: masks/ beside --blobs)");
+  cmd->add_option("--in", args->in, "Folder of patches, each one blob (instead of --images/--blobs)");
+  cmd->add_option("--model", args->model, "Colour model that finds the fruit pixels of patches (with --in)");
+  cmd->add_option("--criterion", args->criterion, "Model selection: bic or aic")->capture_default_str();
+  cmd->add_option("--max-fruits", args->options.max_fruits, "Largest count per blob")->capture_default_str();
+  cmd->add_option("--out", args->out, "counts.csv to write")->required();
+  cmd->callback([args]() {
+    if (args->method != "gmm") Fail("counter method '", args->method, "' is not available (available: gmm)");
+    args->options.criterion = ParseModelSelection(args->criterion);
+    std::shared_ptr<const ColourModel> model;
+    if (!args->model.empty()) model = std::make_shared<ColourModel>(ReadColourModel(args->model));
+    GmmCounter counter(args->options, model);
+    std::vector<ImageCount> counts;
+    std::ostringstream fruits;
+    fruits << "name,blob_id,fruit,cx,cy,radius\n";
+    if (!args->in.empty()) {
+      if (!model) Fail("--in (patches) needs --model to find the fruit pixels");
+      for (const fs::path& p : ListImages(args->in)) {
+        const BlobCount c = counter.Count(ReadImage(p), cv::Mat1b());
+        counts.push_back({p.filename().string(), c.count});
+        AppendFruits(p.filename().string(), 1, c, 0, 0, &fruits);
+      }
+      if (counts.empty()) Fail("no patches in ", args->in);
+    } else {
+      if (args->images.empty() || args->blobs.empty()) Fail("give --images DIR and --blobs FILE, or --in PATCHDIR");
+      const fs::path masks = args->masks.empty() ? fs::path(args->blobs).parent_path() / "masks" : fs::path(args->masks);
+      std::map<std::string, std::vector<Blob>> by_image;
+      for (const BlobRecord& r : ReadBlobsCsv(args->blobs)) by_image[r.name].push_back(r.blob);
+      for (const fs::path& p : ListImages(args->images)) by_image[p.filename().string()];  // images without blobs: 0
+      for (const auto& [name, blobs] : by_image) {
+        int total = 0;
+        if (!blobs.empty()) {
+          const fs::path image_path = fs::path(args->images) / name;
+          const cv::Mat image = ReadImage(image_path);
+          const cv::Mat ids = ReadImage(masks / (fs::path(name).stem().string() + ".png"), cv::IMREAD_UNCHANGED);
+          if (ids.size() != image.size())
+            Fail("mask of ", name, " is ", ids.cols, "x", ids.rows, ", the image ", image.cols, "x", image.rows);
+          cv::Mat ids32;
+          ids.convertTo(ids32, CV_32S);
+          for (const Blob& b : blobs) {
+            const cv::Rect roi = cv::Rect(static_cast<int>(b.box.x1), static_cast<int>(b.box.y1),
+                                          static_cast<int>(std::ceil(b.box.Width())),
+                                          static_cast<int>(std::ceil(b.box.Height()))) &
+                                 cv::Rect(0, 0, image.cols, image.rows);
+            if (roi.empty()) Fail(args->blobs, ": blob ", b.id, " of ", name, " lies outside the image");
+            cv::Mat1b mask = ids32(roi) == b.id;
+            const BlobCount c = counter.Count(image(roi), mask);
+            total += c.count;
+            AppendFruits(name, b.id, c, roi.x, roi.y, &fruits);
+          }
+        }
+        counts.push_back({name, total});
+      }
+    }
+    WriteCodaLabCounts(counts, args->out);
+    WriteTextFileAtomic(fs::path(args->out).parent_path() / "fruits.csv", fruits.str());
+    int total = 0;
+    for (const ImageCount& c : counts) total += c.count;
+    spdlog::info("{} images/patches, {} apples -> {}", counts.size(), total, args->out);
+  });
+}
+
+}  // namespace orchard
