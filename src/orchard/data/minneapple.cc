@@ -104,7 +104,15 @@ cv::Mat RasteriseInstances(const std::vector<Annotation>& objects, cv::Size size
     Fail("cannot write an instance mask with ", objects.size(), " objects (16-bit ids, at most 65535)");
   }
   cv::Mat ids(size, CV_16U, cv::Scalar(0));
-  for (size_t i = 0; i < objects.size(); ++i) {
+  // Larger objects first, so a small apple overlapping a big box stays visible.
+  std::vector<size_t> order(objects.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    const double area_a = objects[a].area >= 0 ? objects[a].area : objects[a].box.Area();
+    const double area_b = objects[b].area >= 0 ? objects[b].area : objects[b].box.Area();
+    return area_a > area_b;
+  });
+  for (const size_t i : order) {
     const cv::Scalar id(static_cast<double>(i + 1));
     const Annotation& object = objects[i];
     if (!object.polygons.empty()) {
@@ -121,12 +129,13 @@ cv::Mat RasteriseInstances(const std::vector<Annotation>& objects, cv::Size size
         cv::polylines(ids, std::vector<std::vector<cv::Point>>{points}, true, id);
       }
     } else {
-      // Box [x1, x2) covers pixels round(x1) .. round(x2)-1.
-      const int x1 = std::max(0, cvRound(object.box.x1));
-      const int y1 = std::max(0, cvRound(object.box.y1));
-      const int x2 = std::min(size.width, cvRound(object.box.x2));
-      const int y2 = std::min(size.height, cvRound(object.box.y2));
-      if (x2 > x1 && y2 > y1) ids(cv::Rect(x1, y1, x2 - x1, y2 - y1)).setTo(id);
+      // Box [x1, x2) covers pixels round(x1) .. round(x2)-1, at least one
+      // pixel so that degenerate boxes (thinner than a pixel) are not lost.
+      const int x1 = std::clamp(cvRound(object.box.x1), 0, size.width - 1);
+      const int y1 = std::clamp(cvRound(object.box.y1), 0, size.height - 1);
+      const int x2 = std::clamp(cvRound(object.box.x2), x1 + 1, size.width);
+      const int y2 = std::clamp(cvRound(object.box.y2), y1 + 1, size.height);
+      ids(cv::Rect(x1, y1, x2 - x1, y2 - y1)).setTo(id);
     }
   }
   return ids;

@@ -17,10 +17,12 @@ namespace orchard {
 // are not represented, as in COCO polygons).
 std::vector<Annotation> InstancesFromMask(const cv::Mat& ids, bool with_polygons);
 
-// A CV_16U id image of `size` with object i drawn as id i+1 (later objects over
-// earlier ones): polygons filled (boundary pixels included, so the contours of
-// InstancesFromMask give back a hole-free instance exactly), boxes without
-// polygons filled as pixels round(x1)..round(x2)-1. Throws above 65535 objects.
+// A CV_16U id image of `size` with object i drawn as id i+1, larger objects
+// (by area) first so that smaller ones on top stay visible: polygons filled
+// (boundary pixels included, so the contours of InstancesFromMask give back a
+// hole-free instance exactly), boxes without polygons filled as pixels
+// round(x1)..round(x2)-1 and at least one pixel. An object entirely covered by
+// smaller ones still disappears (masks cannot overlap). Throws above 65535 objects.
 cv::Mat RasteriseInstances(const std::vector<Annotation>& objects, cv::Size size);
 
 }  // namespace orchard

@@ -81,6 +81,17 @@ TEST(InstanceMask, RasterisingContoursGivesBackHoleFreeInstances) {
   EXPECT_EQ(cv::countNonZero(boxes), 3);
   EXPECT_EQ(boxes.at<uint16_t>(2, 1), 1);
   EXPECT_EQ(boxes.at<uint16_t>(2, 3), 1);
+  // A degenerate box keeps one pixel; a small box over a big one stays on top
+  // whatever the order; a box on the border is clipped.
+  const cv::Mat ordered = RasteriseInstances(
+      {{Box{2, 2, 3, 3}, -1, {}, 0}, {Box{0, 0, 6, 5}, -1, {}, 0}, {Box{5.2, 4.1, 5.3, 4.1}, -1, {}, 0},
+       {Box{4, 3, 9, 9}, -1, {}, 0}},
+      cv::Size(6, 5));
+  EXPECT_EQ(ordered.at<uint16_t>(2, 2), 1);
+  EXPECT_EQ(ordered.at<uint16_t>(0, 0), 2);
+  EXPECT_EQ(ordered.at<uint16_t>(4, 5), 3);
+  EXPECT_EQ(ordered.at<uint16_t>(3, 4), 4);
+  EXPECT_EQ(cv::countNonZero(ordered == 4), 3);  // (4,3) (5,3) (4,4)
 }
 
 TEST(InstanceMask, AcceptsEightSixteenBitAndEqualChannels) {
