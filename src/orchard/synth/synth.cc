@@ -255,6 +255,12 @@ void SynthOptions::Check() const {
   render.Check();
   ORCHARD_CHECK_OPTION(camera.distance > 0.5 * scene.canopy_thickness * (scene.canopy_shape == "round" ? 1.5 : 1.0) + 0.3,
                        "--distance ", camera.distance, " m puts the camera inside the canopy");
+  // The neighbouring row behind the camera must not reach into the view.
+  const double neighbour_half = scene.canopy_shape == "round" ? 0.75 * 1.15 * scene.canopy_thickness
+                                                              : 0.5 * 1.25 * scene.canopy_thickness;
+  ORCHARD_CHECK_OPTION(!scene.background_rows || camera.distance + neighbour_half + 0.1 <= scene.row_spacing,
+                       "--distance ", camera.distance, " m puts the camera inside the neighbouring row's canopy (",
+                       "--row-spacing ", scene.row_spacing, " m); increase --row-spacing or reduce --distance");
   ORCHARD_CHECK_OPTION(min_visible_pixels >= 1, "--min-visible-pixels must be at least 1, got ", min_visible_pixels);
   ORCHARD_CHECK_OPTION(patch_every >= 0, "--patch-every must be >= 0, got ", patch_every);
   ORCHARD_CHECK_OPTION(patch_margin >= 0 && patch_margin <= 2, "--patch-margin must be in 0..2, got ", patch_margin);

@@ -296,6 +296,13 @@ TEST(Synth, BadOptionsGiveClearErrors) {
   ExpectOptionError([](SynthOptions& o) { o.camera.distance = 0.6; }, "inside the canopy");
   ExpectOptionError([](SynthOptions& o) { o.scene.apple_radius_min = 0.06; }, "apple radius range");
   ExpectOptionError([](SynthOptions& o) { o.render.noise_sigma = -1; }, "--noise");
+  ExpectOptionError(
+      [](SynthOptions& o) {
+        o.scene.background_rows = true;
+        o.scene.canopy_shape = "round";
+        o.scene.canopy_thickness = 1.6;
+      },
+      "inside the neighbouring row's canopy");
 }
 
 TEST(Synth, CommandLineReportsBadValues) {
