@@ -29,11 +29,11 @@ Dataset SelectPhotos(const Dataset& dataset, const std::vector<std::string>& pho
   return selected;
 }
 
-DatasetSplit SplitByPhoto(const Dataset& dataset, double test_fraction, uint64_t seed) {
+std::vector<std::string> ChooseTestPhotos(const std::vector<std::string>& photo_ids, double test_fraction,
+                                          uint64_t seed) {
   ORCHARD_CHECK_OPTION(test_fraction >= 0 && test_fraction <= 1, "test fraction must be in [0, 1], got ",
                        test_fraction);
-  std::set<std::string> unique;
-  for (const AnnotatedImage& image : dataset.images) unique.insert(PhotoId(image.name));
+  const std::set<std::string> unique(photo_ids.begin(), photo_ids.end());
   std::vector<std::string> photos(unique.begin(), unique.end());
   if (photos.empty()) Fail("cannot split an empty dataset");
   // Fisher-Yates with the raw generator: std::shuffle's algorithm is not
@@ -44,11 +44,20 @@ DatasetSplit SplitByPhoto(const Dataset& dataset, double test_fraction, uint64_t
   if (photos.size() >= 2 && test_fraction > 0 && test_fraction < 1) {
     n_test = std::clamp<size_t>(n_test, 1, photos.size() - 1);
   }
+  photos.resize(n_test);
+  std::sort(photos.begin(), photos.end());
+  return photos;
+}
+
+DatasetSplit SplitByPhoto(const Dataset& dataset, double test_fraction, uint64_t seed) {
+  std::vector<std::string> all;
+  for (const AnnotatedImage& image : dataset.images) all.push_back(PhotoId(image.name));
   DatasetSplit split;
-  split.test_photos.assign(photos.begin(), photos.begin() + n_test);
-  split.train_photos.assign(photos.begin() + n_test, photos.end());
-  std::sort(split.test_photos.begin(), split.test_photos.end());
-  std::sort(split.train_photos.begin(), split.train_photos.end());
+  split.test_photos = ChooseTestPhotos(all, test_fraction, seed);
+  const std::set<std::string> test(split.test_photos.begin(), split.test_photos.end());
+  for (const std::string& photo : std::set<std::string>(all.begin(), all.end())) {
+    if (!test.count(photo)) split.train_photos.push_back(photo);
+  }
   split.train = SelectPhotos(dataset, split.train_photos);
   split.test = SelectPhotos(dataset, split.test_photos);
   return split;

@@ -28,6 +28,11 @@ struct DatasetSplit {
 // sorted photo ids, so the same seed gives the same split on any machine.
 DatasetSplit SplitByPhoto(const Dataset& dataset, double test_fraction, uint64_t seed);
 
+// The photos SplitByPhoto would put in the test set, from a list of photo ids
+// (duplicates ignored), sorted.
+std::vector<std::string> ChooseTestPhotos(const std::vector<std::string>& photos, double test_fraction,
+                                          uint64_t seed);
+
 // The images of `dataset` whose photo is in `photos`.
 Dataset SelectPhotos(const Dataset& dataset, const std::vector<std::string>& photos);
 

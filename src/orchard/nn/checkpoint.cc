@@ -86,4 +86,19 @@ void LoadCheckpointWeights(torch::nn::Module& module, const fs::path& path) {
   }
 }
 
+BestCheckpoint::BestCheckpoint(const fs::path& model_path)
+    : model_path_(model_path),
+      side_path_(model_path.parent_path() / ("." + model_path.filename().string() + ".best")) {}
+
+void BestCheckpoint::Save(torch::nn::Module& module, const nlohmann::json& header) {
+  SaveCheckpoint(module, header, side_path_);
+}
+
+void BestCheckpoint::Finish(torch::nn::Module& module, const nlohmann::json& header) {
+  LoadCheckpointWeights(module, side_path_);
+  SaveCheckpoint(module, header, model_path_);
+  std::error_code ec;
+  fs::remove(side_path_, ec);
+}
+
 }  // namespace orchard::nn

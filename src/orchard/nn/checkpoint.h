@@ -28,4 +28,19 @@ nlohmann::json ReadCheckpointHeader(const fs::path& path, const std::string& exp
 // orchard::Error when a tensor is missing or has another shape.
 void LoadCheckpointWeights(torch::nn::Module& module, const fs::path& path);
 
+// Keeps the best epoch of a training run in a hidden side file next to
+// `model_path`, so an interrupted run leaves an earlier model there untouched;
+// Finish() writes the best weights with the final header to `model_path`.
+class BestCheckpoint {
+ public:
+  explicit BestCheckpoint(const fs::path& model_path);
+  void Save(torch::nn::Module& module, const nlohmann::json& header);
+  // Loads the best weights into `module` and writes them with `header`.
+  void Finish(torch::nn::Module& module, const nlohmann::json& header);
+
+ private:
+  fs::path model_path_;
+  fs::path side_path_;
+};
+
 }  // namespace orchard::nn

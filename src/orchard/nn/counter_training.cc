@@ -126,20 +126,10 @@ CounterTrainingResult TrainCounter(const std::vector<LabelledPatch>& patches, co
                                    const nlohmann::json& data_description, const fs::path& model_path) {
   options.Check();
   if (patches.empty()) Fail("no training patches");
-  // Validation photos: a seeded choice among the sorted photo ids.
-  std::set<std::string> photo_set;
-  for (const LabelledPatch& p : patches) photo_set.insert(p.photo);
-  Dataset photos;
-  for (const std::string& photo : photo_set) {
-    AnnotatedImage image;
-    image.name = photo + "_0";  // PhotoId(name) == photo
-    photos.images.push_back(image);
-  }
-  std::set<std::string> val_photos;
-  if (photo_set.size() >= 2) {
-    const DatasetSplit split = SplitByPhoto(photos, options.validation_fraction, options.split_seed);
-    val_photos.insert(split.test_photos.begin(), split.test_photos.end());
-  }
+  std::vector<std::string> photo_ids;
+  for (const LabelledPatch& p : patches) photo_ids.push_back(p.photo);
+  const std::vector<std::string> chosen = ChooseTestPhotos(photo_ids, options.validation_fraction, options.split_seed);
+  const std::set<std::string> val_photos(chosen.begin(), chosen.end());
 
   CounterTrainingResult result;
   result.train_class_counts.assign(kClasses, 0);
@@ -156,7 +146,9 @@ CounterTrainingResult TrainCounter(const std::vector<LabelledPatch>& patches, co
       ++result.train_class_counts[p.count];
     }
   }
-  if (train_images.empty()) Fail("every patch fell in the validation split: give more photos");
+  if (train_images.empty() || val_images.empty()) {
+    Fail("training and validation each need patches from at least one photo: give patches from more photos");
+  }
   result.train_patches = static_cast<int>(train_images.size());
   result.validation_patches = static_cast<int>(val_images.size());
 
@@ -169,21 +161,15 @@ CounterTrainingResult TrainCounter(const std::vector<LabelledPatch>& patches, co
                            {"train_patches", result.train_patches},
                            {"validation_patches", result.validation_patches},
                            {"train_class_counts", result.train_class_counts}};
-  // The best epoch goes to a side file, so an interrupted run leaves an earlier
-  // model at `model_path` untouched.
-  const fs::path best_path = model_path.parent_path() / ("." + model_path.filename().string() + ".best");
-  auto save_best = [&] { SaveCheckpoint(*net, header, best_path); };
+  BestCheckpoint best(model_path);
+  auto save_best = [&] { best.Save(*net, header); };
   CounterTask task(net, options, std::move(train_images), std::move(train_labels), std::move(val_images),
                    std::move(val_labels), save_best);
   torch::optim::Adam adam(net->parameters(),
                           torch::optim::AdamOptions(options.learning_rate).betas(std::make_tuple(0.9, 0.999)));
   result.record = Train(task, *net, adam, options.trainer);
-  // Keep the best epoch's weights, now with the whole training record in the header.
-  LoadCheckpointWeights(*net, best_path);
   header["training"] = result.record.ToJson();
-  SaveCheckpoint(*net, header, model_path);
-  std::error_code ec;
-  fs::remove(best_path, ec);
+  best.Finish(*net, header);
   return result;
 }
 

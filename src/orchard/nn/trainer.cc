@@ -111,11 +111,13 @@ TrainingRecord Train(TrainingTask& task, torch::nn::Module& model, torch::optim:
   while (record.epochs_run < options.max_epochs && !record.stopped_early) {
     const int epoch = record.epochs_run + 1;
     std::shuffle(order.begin(), order.end(), rng);
+    const size_t epoch_size =
+        options.samples_per_epoch > 0 ? std::min(order.size(), options.samples_per_epoch) : order.size();
     model.train();
     double loss_sum = 0;
     size_t batches = 0;
-    for (size_t begin = 0; begin < order.size(); begin += options.batch_size) {
-      const size_t end = std::min(order.size(), begin + options.batch_size);
+    for (size_t begin = 0; begin < epoch_size; begin += options.batch_size) {
+      const size_t end = std::min(epoch_size, begin + options.batch_size);
       std::vector<size_t> indices(order.begin() + begin, order.begin() + end);
       optimizer.zero_grad();
       torch::Tensor loss = task.TrainLoss(indices, rng);
@@ -124,7 +126,7 @@ TrainingRecord Train(TrainingTask& task, torch::nn::Module& model, torch::optim:
       optimizer.step();
       loss_sum += loss.item<double>();
       ++batches;
-      PrintProgress(epoch, options.max_epochs, end, order.size(), loss_sum / batches, tty);
+      PrintProgress(epoch, options.max_epochs, end, epoch_size, loss_sum / batches, tty);
     }
     model.eval();
     double metric;

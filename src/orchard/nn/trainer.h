@@ -20,6 +20,9 @@ struct TrainerOptions {
   int max_epochs = 50;   // upper bound on passes over the training set
   int patience = 5;      // stop after this many epochs without a better validation metric
   int batch_size = 16;
+  // Training samples drawn (without replacement, reshuffled) per epoch; 0 =
+  // all. Dense tilings hold far more samples than a CPU epoch can afford.
+  size_t samples_per_epoch = 0;
   uint64_t seed = 0;     // shuffling, augmentation and weight initialisation
   int threads = 0;       // LibTorch intra-op threads; 0 = all cores of the machine
   // Folder for the resumable state (model, optimiser, record after each epoch);
