@@ -11,7 +11,8 @@
 #include "orchard/cli/commands.h"
 #include "orchard/core/error.h"
 #include "orchard/core/file_io.h"
-#include "orchard/count/gmm_counter.h"
+#include "orchard/count/counter_factory.h"
+#include "orchard/data/count_patches.h"
 #include "orchard/data/dataset.h"
 #include "orchard/detect/detector.h"
 
@@ -32,32 +33,37 @@ void AddCountCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "count", "Count apples per blob: counts.csv (name,count per image) and fruits.csv beside it");
   struct Args {
-    std::string method = "gmm", images, blobs, masks, in, model, out, criterion = "bic";
-    GmmCounterOptions options;
+    std::string images, blobs, masks, in, out, criterion = "bic";
+    CounterChoice counter;
   };
   auto args = std::make_shared<Args>();
-  cmd->add_option("--method", args->method, "Counter: gmm")->capture_default_str();
+  cmd->add_option("--method", args->counter.method, "Counter: cnn (ResNet classifier, 0..6) or gmm (mixture fit)")
+      ->capture_default_str();
   cmd->add_option("--images", args->images, "Folder of the frames the blobs were detected in");
   cmd->add_option("--blobs", args->blobs, "blobs.csv from `orchard detect`");
   cmd->add_option("--masks", args->masks, "Instance masks from `orchard detect` (default: masks/ beside --blobs)");
   cmd->add_option("--in", args->in, "Folder of patches, each one blob (instead of --images/--blobs)");
-  cmd->add_option("--model", args->model, "Colour model that finds the fruit pixels of patches (with --in)");
+  cmd->add_option("--model", args->counter.model,
+                  "cnn: counter model .pt (default: the shipped models/counter.pt); gmm: colour model json that "
+                  "finds the fruit pixels of patches (needed with --in)");
   cmd->add_option("--criterion", args->criterion, "Model selection: bic or aic")->capture_default_str();
-  cmd->add_option("--max-fruits", args->options.max_fruits, "Largest count per blob")->capture_default_str();
+  cmd->add_option("--max-fruits", args->counter.gmm.max_fruits, "Largest count per blob")->capture_default_str();
   cmd->add_option("--out", args->out, "counts.csv to write")->required();
   cmd->callback([args]() {
-    if (args->method != "gmm") Fail("counter method '", args->method, "' is not available (available: gmm)");
-    args->options.criterion = ParseModelSelection(args->criterion);
-    std::shared_ptr<const ColourModel> model;
-    if (!args->model.empty()) model = std::make_shared<ColourModel>(ReadColourModel(args->model));
-    GmmCounter counter(args->options, model);
+    args->counter.gmm.criterion = ParseModelSelection(args->criterion);
+    const bool cnn = args->counter.method == "cnn";
+    if (!cnn && !args->in.empty() && args->counter.model.empty()) {
+      Fail("--in (patches) with the gmm counter needs --model (a colour model) to find the fruit pixels");
+    }
+    const std::unique_ptr<Counter> counter = MakeCounter(args->counter);
     std::vector<ImageCount> counts;
     std::ostringstream fruits;
     fruits << "name,blob_id,fruit,cx,cy,radius\n";
     if (!args->in.empty()) {
-      if (!model) Fail("--in (patches) needs --model to find the fruit pixels");
-      for (const fs::path& p : ListImages(args->in)) {
-        const BlobCount c = counter.Count(ReadImage(p), cv::Mat1b());
+      // A patch folder keeps its images beside counts.csv or in images/.
+      const fs::path patch_dir = fs::is_directory(fs::path(args->in) / "images") ? fs::path(args->in) / "images" : fs::path(args->in);
+      for (const fs::path& p : ListImages(patch_dir)) {
+        const BlobCount c = counter->Count(ReadImage(p), cv::Mat1b());
         counts.push_back({p.filename().string(), c.count});
         AppendFruits(p.filename().string(), 1, c, 0, 0, &fruits);
       }
@@ -79,13 +85,18 @@ void AddCountCommand(CLI::App& app) {
           cv::Mat ids32;
           ids.convertTo(ids32, CV_32S);
           for (const Blob& b : blobs) {
-            const cv::Rect roi = cv::Rect(static_cast<int>(b.box.x1), static_cast<int>(b.box.y1),
-                                          static_cast<int>(std::ceil(b.box.Width())),
-                                          static_cast<int>(std::ceil(b.box.Height()))) &
+            // The CNN reads the blob with the margin its training patches had.
+            const CountPatchOptions patch_options;
+            const double m = cnn ? std::max<double>(patch_options.min_margin,
+                                                    patch_options.margin * std::max(b.box.Width(), b.box.Height()))
+                                 : 0.0;
+            const cv::Rect roi = cv::Rect(static_cast<int>(std::floor(b.box.x1 - m)), static_cast<int>(std::floor(b.box.y1 - m)),
+                                          static_cast<int>(std::ceil(b.box.Width() + 2 * m)),
+                                          static_cast<int>(std::ceil(b.box.Height() + 2 * m))) &
                                  cv::Rect(0, 0, image.cols, image.rows);
             if (roi.empty()) Fail(args->blobs, ": blob ", b.id, " of ", name, " lies outside the image");
             cv::Mat1b mask = ids32(roi) == b.id;
-            const BlobCount c = counter.Count(image(roi), mask);
+            const BlobCount c = counter->Count(image(roi), mask);
             total += c.count;
             AppendFruits(name, b.id, c, roi.x, roi.y, &fruits);
           }

@@ -6,41 +6,43 @@
 #include "orchard/core/error.h"
 #include "orchard/core/file_io.h"
 #include "orchard/core/frame_source.h"
-#include "orchard/detect/gmm/gmm_detector.h"
+#include "orchard/detect/detector_factory.h"
 
 namespace orchard {
 
 void AddDetectCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("detect", "Detect fruit: masks/*.png, blobs.csv, detections.csv (CodaLab)");
   struct Args {
-    std::string method = "gmm", model, in, out;
-    GmmDetectorOptions gmm;
+    std::string in, out;
+    DetectorChoice detector;
     FrameSourceOptions frames;
   };
   auto args = std::make_shared<Args>();
-  cmd->add_option("--method", args->method, "Detector: gmm")->capture_default_str();
-  cmd->add_option("--model", args->model, "Model file (gmm: colour model json from `orchard train gmm`)")->required();
+  cmd->add_option("--method", args->detector.method, "Detector: gmm (colour mixtures) or unet (segmentation network)")
+      ->capture_default_str();
+  cmd->add_option("--model", args->detector.model,
+                  "Model file: gmm colour model json (`orchard train gmm`), unet .pt (`orchard train unet`); "
+                  "default: the shipped models/gmm_red.json or models/unet.pt");
   cmd->add_option("--in", args->in, "Folder of images or a video file")->required();
   cmd->add_option("--out", args->out, "Output folder")->required();
-  cmd->add_flag("--reference-slic", args->gmm.reference_slic,
+  cmd->add_option("--threshold", args->detector.unet_threshold, "unet: apple probability threshold")
+      ->capture_default_str();
+  cmd->add_flag("--reference-slic", args->detector.reference_slic,
                 "gmm: OpenCV's SLIC at full resolution (slow reference path)");
-  cmd->add_option("--min-blob-pixels", args->gmm.blobs.min_pixels, "Drop blobs smaller than this")
+  cmd->add_option("--min-blob-pixels", args->detector.blobs.min_pixels, "Drop blobs smaller than this")
       ->capture_default_str();
   cmd->add_option("--step", args->frames.step, "Keep every n-th frame")->capture_default_str();
   cmd->add_option("--max-frames", args->frames.max_frames, "Stop after this many frames (0 = all)")
       ->capture_default_str();
-  cmd->add_option("--threads", args->gmm.num_threads, "Threads")->capture_default_str();
+  cmd->add_option("--threads", args->detector.threads, "Threads (0 = all cores)")->capture_default_str();
   cmd->callback([args]() {
-    if (args->method != "gmm")
-      Fail("detector method '", args->method, "' is not available (available: gmm)");
-    const ColourModel model = ReadColourModel(args->model);
-    GmmDetector detector(model, args->gmm);
+    const std::unique_ptr<Detector> detector = MakeDetector(args->detector);
     FrameSource source(args->in, args->frames);
     const fs::path out = args->out;
     std::vector<NamedDetection> results;
     Frame frame;
     while (source.Next(&frame)) {
-      NamedDetection r{frame.name, detector.Detect(frame.image)};
+      NamedDetection r{frame.name, detector->Detect(frame.image)};
       WriteImageAtomic(out / "masks" / (fs::path(frame.name).stem().string() + ".png"), InstanceMask(r.detection));
       // Keep only the blob list in memory, not the masks.
       r.detection.mask.release();

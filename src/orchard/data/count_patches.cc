@@ -123,7 +123,7 @@ void WriteCountPatches(const Dataset& dataset, const std::vector<CountPatch>& pa
     if (inside != patch.crop) Fail("patch outside image ", patch.image);
     const std::string name =
         fs::path(patch.image).stem().string() + "_p" + std::to_string(next_index[patch.image]++) + ".png";
-    WriteImageAtomic(dir / name, image(patch.crop));
+    WriteImageAtomic(dir / "images" / name, image(patch.crop));
     counts.push_back({name, patch.count});
   }
   WriteCodaLabCounts(counts, dir / "counts.csv");

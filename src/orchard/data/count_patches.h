@@ -46,8 +46,9 @@ std::vector<std::vector<int>> GroupTouchingBoxes(const std::vector<Box>& boxes, 
 // the dataset (width/height must be known).
 std::vector<CountPatch> MakeCountPatches(const Dataset& dataset, const CountPatchOptions& options);
 
-// Writes each patch as `dir/<image stem>_p<k>.png` (cut from the dataset's
-// image files) and `dir/counts.csv` (CodaLab `name,count`).
+// Writes each patch as `dir/images/<image stem>_p<k>.png` (cut from the
+// dataset's image files) and `dir/counts.csv` (CodaLab `name,count`): the
+// layout of the synthetic generator's patches.
 void WriteCountPatches(const Dataset& dataset, const std::vector<CountPatch>& patches, const fs::path& dir);
 
 }  // namespace orchard

@@ -88,7 +88,10 @@ std::vector<LabelledPatch> ReadPatchFolder(const fs::path& dir) {
     if (entry.count < 0 || entry.count >= kClasses) {
       Fail(counts_file.string(), ": count of ", entry.name, " is ", entry.count, ", the counter knows 0..6");
     }
-    patches.push_back({ReadImage(dir / entry.name), entry.count, PatchPhotoId(entry.name)});
+    // Patches sit beside counts.csv or in images/ below it (the synthetic generator's layout).
+    std::error_code exists_ec;
+    const fs::path path = fs::exists(dir / entry.name, exists_ec) ? dir / entry.name : dir / "images" / entry.name;
+    patches.push_back({ReadImage(path), entry.count, PatchPhotoId(entry.name)});
   }
   if (patches.empty()) Fail("patch folder ", dir.string(), " has no patches");
   return patches;

@@ -26,8 +26,9 @@ struct LabelledPatch {
   std::string photo;  // source photo id: validation splits keep a photo on one side
 };
 
-// A folder of patch images with a CodaLab counting file `counts.csv`
-// (`name,count`), as written by `orchard patches` or `orchard synth`.
+// A folder with a CodaLab counting file `counts.csv` (`name,count`) and the
+// patch images beside it or in `images/` (as `orchard patches` and
+// `orchard synth` write them).
 std::vector<LabelledPatch> ReadPatchFolder(const fs::path& dir);
 
 // Patches cut from an annotated dataset (touching boxes -> clusters).

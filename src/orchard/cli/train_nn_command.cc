@@ -1,0 +1,166 @@
+// `orchard train counter` and `orchard train unet`: the study's two networks,
+// trained from scratch on CPU; and `orchard patches`, real counting patches cut
+// from box annotations.
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include "orchard/cli/commands.h"
+#include "orchard/cli/dataset_subset.h"
+#include "orchard/core/error.h"
+#include "orchard/data/count_patches.h"
+#include "orchard/data/dataset.h"
+#include "orchard/nn/counter_training.h"
+#include "orchard/nn/segmentation_training.h"
+
+namespace orchard {
+namespace {
+
+void AddTrainerOptions(CLI::App* cmd, nn::TrainerOptions* trainer, std::string* state_dir) {
+  cmd->add_option("--epochs", trainer->max_epochs, "Most epochs")->capture_default_str();
+  cmd->add_option("--patience", trainer->patience, "Stop after this many epochs without a better validation metric")
+      ->capture_default_str();
+  cmd->add_option("--batch", trainer->batch_size, "Batch size")->capture_default_str();
+  cmd->add_option("--seed", trainer->seed, "Seed of initialisation, shuffling and augmentation")->capture_default_str();
+  cmd->add_option("--threads", trainer->threads, "LibTorch threads (0 = all cores)")->capture_default_str();
+  cmd->add_option("--state", *state_dir, "Folder for resumable training state: rerun with it to resume");
+}
+
+nlohmann::json Describe(const std::vector<std::string>& data, const std::vector<std::string>& patches,
+                        const SubsetArgs& subset) {
+  return {{"datasets", data}, {"patch_folders", patches}, {"subset", subset.subset},
+          {"test_fraction", subset.test_fraction}, {"split_seed", subset.split_seed}};
+}
+
+}  // namespace
+
+void AddTrainNetworkCommands(CLI::App& app) {
+  CLI::App* train = app.get_subcommand("train");
+
+  // ---- counter ----
+  CLI::App* counter = train->add_subcommand(
+      "counter", "ResNet cluster counter (0..6 apples) from patch folders and/or box-annotated datasets");
+  struct CounterArgs {
+    std::vector<std::string> data, patches;
+    std::string out, state;
+    SubsetArgs subset;
+    nn::CounterTrainingOptions options;
+    CountPatchOptions patch_options;
+  };
+  auto c = std::make_shared<CounterArgs>();
+  c->options.trainer.batch_size = 32;
+  counter->add_option("--data", c->data, "Box-annotated dataset to cut cluster patches from (repeatable)");
+  counter->add_option("--patches", c->patches, "Patch folder with counts.csv, e.g. a synthetic row's patches/ (repeatable)");
+  counter->add_option("--out", c->out, "Model file to write (.pt)")->required();
+  c->subset.AddOptions(counter, "train");
+  counter->add_option("--depth", c->options.architecture.depth, "ResNet depth: 18, 34 or 50")->capture_default_str();
+  counter->add_option("--width", c->options.architecture.base_width, "Channels of the first stage (paper: 64)")
+      ->capture_default_str();
+  counter->add_option("--input", c->options.input_size, "Input side in pixels (paper: 224)")->capture_default_str();
+  counter->add_option("--lr", c->options.learning_rate, "Adam learning rate")->capture_default_str();
+  counter->add_option("--val-fraction", c->options.validation_fraction, "Fraction of training photos for validation")
+      ->capture_default_str();
+  counter->add_option("--background", c->patch_options.background_per_image, "Background patches per image")
+      ->capture_default_str();
+  AddTrainerOptions(counter, &c->options.trainer, &c->state);
+  counter->callback([c]() {
+    if (c->data.empty() && c->patches.empty()) Fail("give --data and/or --patches");
+    c->options.trainer.state_dir = c->state;
+    std::vector<nn::LabelledPatch> patches;
+    for (const std::string& path : c->data) {
+      const Dataset dataset = c->subset.Select(ReadDataset(path));
+      std::vector<nn::LabelledPatch> cut = nn::CutDatasetPatches(dataset, c->patch_options);
+      spdlog::info("{}: {} images, {} patches ({} photos)", path, dataset.images.size(), cut.size(), c->subset.subset);
+      patches.insert(patches.end(), cut.begin(), cut.end());
+    }
+    for (const std::string& dir : c->patches) {
+      std::vector<nn::LabelledPatch> read = nn::ReadPatchFolder(dir);
+      spdlog::info("{}: {} patches", dir, read.size());
+      patches.insert(patches.end(), read.begin(), read.end());
+    }
+    const nn::CounterTrainingResult result =
+        nn::TrainCounter(patches, c->options, Describe(c->data, c->patches, c->subset), c->out);
+    spdlog::info("wrote {}: {} training / {} validation patches, best val accuracy {:.4f} at epoch {} of {} ({:.0f} s)",
+                 c->out, result.train_patches, result.validation_patches, result.record.best_metric,
+                 result.record.best_epoch, result.record.epochs_run, result.record.seconds);
+  });
+
+  // ---- unet ----
+  CLI::App* unet = train->add_subcommand(
+      "unet", "U-Net fruit segmentation from datasets with masks (MinneApple layout, synthetic sides) or boxes");
+  struct UNetArgs {
+    std::vector<std::string> data;
+    std::string out, state;
+    SubsetArgs subset;
+    nn::UNetTrainingOptions options;
+  };
+  auto u = std::make_shared<UNetArgs>();
+  u->options.trainer.batch_size = 8;
+  u->options.trainer.samples_per_epoch = 800;
+  u->options.trainer.patience = 4;
+  unet->add_option("--data", u->data,
+                   "Dataset: MinneApple folder / synthetic side (masks) or YOLO/COCO (boxes -> inscribed ellipses); "
+                   "repeatable")
+      ->required();
+  unet->add_option("--out", u->out, "Model file to write (.pt)")->required();
+  u->subset.AddOptions(unet, "train");
+  unet->add_option("--width", u->options.architecture.base_width, "Channels of the first block (VGG-16: 64)")
+      ->capture_default_str();
+  unet->add_option("--blocks", u->options.architecture.blocks, "Encoder blocks (VGG-16: 5)")->capture_default_str();
+  unet->add_option("--tile", u->options.tile, "Training tile side (the study: 224)")->capture_default_str();
+  unet->add_option("--stride", u->options.stride, "Training tiles are cut every this many pixels (the study: 50)")
+      ->capture_default_str();
+  unet->add_option("--lr", u->options.learning_rate, "AdaDelta learning rate")->capture_default_str();
+  unet->add_option("--tiles-per-epoch", u->options.trainer.samples_per_epoch, "Training tiles drawn per epoch (0 = all)")
+      ->capture_default_str();
+  unet->add_option("--val-fraction", u->options.validation_fraction, "Fraction of training photos for validation")
+      ->capture_default_str();
+  AddTrainerOptions(unet, &u->options.trainer, &u->state);
+  unet->callback([u]() {
+    u->options.trainer.state_dir = u->state;
+    std::vector<nn::SegmentationSample> samples;
+    for (const std::string& path : u->data) {
+      const Dataset dataset = u->subset.Select(ReadDataset(path));
+      std::vector<nn::SegmentationSample> loaded = nn::LoadSegmentationSamples(dataset);
+      spdlog::info("{}: {} images ({} photos, {})", path, loaded.size(), u->subset.subset,
+                   dataset.has_masks ? "masks" : "box ellipses");
+      samples.insert(samples.end(), std::make_move_iterator(loaded.begin()), std::make_move_iterator(loaded.end()));
+    }
+    const nn::UNetTrainingResult result = nn::TrainUNet(samples, u->options, Describe(u->data, {}, u->subset), u->out);
+    spdlog::info("wrote {}: {} training / {} validation tiles, best val apple IoU {:.4f} at epoch {} of {} ({:.0f} s)",
+                 u->out, result.train_tiles, result.validation_tiles, result.record.best_metric,
+                 result.record.best_epoch, result.record.epochs_run, result.record.seconds);
+  });
+}
+
+void AddPatchesCommand(CLI::App& app) {
+  CLI::App* cmd = app.add_subcommand(
+      "patches", "Counting patches from box annotations: touching boxes form a cluster labelled with its box count");
+  struct Args {
+    std::string data, out;
+    SubsetArgs subset;
+    CountPatchOptions options;
+  };
+  auto a = std::make_shared<Args>();
+  cmd->add_option("--data", a->data, "Box-annotated dataset (YOLO folder, COCO json, MinneApple folder)")->required();
+  cmd->add_option("--out", a->out, "Output folder: images/*.png and counts.csv")->required();
+  a->subset.AddOptions(cmd, "all");
+  cmd->add_option("--margin", a->options.margin, "Margin around a cluster, fraction of its longer side")
+      ->capture_default_str();
+  cmd->add_option("--background", a->options.background_per_image, "Background patches (count 0) per image")
+      ->capture_default_str();
+  cmd->add_option("--seed", a->options.seed, "Seed of background placement")->capture_default_str();
+  cmd->callback([a]() {
+    const Dataset dataset = a->subset.Select(ReadDataset(a->data));
+    const std::vector<CountPatch> patches = MakeCountPatches(dataset, a->options);
+    if (patches.empty()) Fail("no patches: the dataset has no clusters of 1..", a->options.max_count, " boxes");
+    WriteCountPatches(dataset, patches, a->out);
+    std::vector<int> histogram(a->options.max_count + 1, 0);
+    for (const CountPatch& p : patches) ++histogram[p.count];
+    std::string summary;
+    for (size_t k = 0; k < histogram.size(); ++k) summary += " " + std::to_string(k) + ":" + std::to_string(histogram[k]);
+    spdlog::info("{} images -> {} patches in {} (count:patches{})", dataset.images.size(), patches.size(), a->out,
+                 summary);
+  });
+}
+
+}  // namespace orchard

@@ -1,0 +1,31 @@
+// Builds a detector from its method name, so commands and the pipeline can
+// switch detectors with one option (`--detector gmm|unet`).
+#pragma once
+
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include "orchard/detect/detector.h"
+
+namespace orchard {
+
+struct DetectorChoice {
+  std::string method = "gmm";  // "gmm" (colour mixtures) or "unet" (segmentation network)
+  // Model file; empty = the shipped default (models/gmm_red.json, models/unet.pt).
+  std::filesystem::path model;
+  bool reference_slic = false;  // gmm: OpenCV's SLIC at full resolution (slow reference path)
+  BlobOptions blobs;
+  int threads = 0;  // 0 = all cores
+  double unet_threshold = 0.5;
+
+  void Check() const;
+};
+
+// The model file a method uses by default, inside DefaultModelsDir().
+std::filesystem::path DefaultDetectorModel(const std::string& method);
+
+// Throws orchard::Error for an unknown method or a model that cannot be loaded.
+std::unique_ptr<Detector> MakeDetector(const DetectorChoice& choice);
+
+}  // namespace orchard
