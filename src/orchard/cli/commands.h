@@ -16,6 +16,7 @@ void AddEvalCommand(CLI::App& app);     // orchard eval: detection/segmentation/
 void AddTrainCommand(CLI::App& app);    // orchard train gmm: colour model of the GMM detector
 void AddDetectCommand(CLI::App& app);   // orchard detect: fruit masks, blobs, detections
 void AddCountCommand(CLI::App& app);    // orchard count: apples per blob
+void AddSideCommand(CLI::App& app);     // orchard side: one side of a row in 3D, tracked count
 void AddTrainNetworkCommands(CLI::App& app);  // orchard train counter|unet (needs AddTrainCommand first)
 void AddPatchesCommand(CLI::App& app);        // orchard patches: counting patches from box annotations
 

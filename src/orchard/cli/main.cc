@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
   orchard::AddTrainCommand(app);
   orchard::AddDetectCommand(app);
   orchard::AddCountCommand(app);
+  orchard::AddSideCommand(app);
   orchard::AddTrainNetworkCommands(app);  // after AddTrainCommand: adds to `train`
   orchard::AddPatchesCommand(app);
 

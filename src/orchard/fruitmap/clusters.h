@@ -1,0 +1,31 @@
+// Fruit clusters: 3D connected components of the fruit points, and the count
+// of a cluster from its best views (the study's rule: the median of the
+// counts in the three frames where the cluster shows the most fruit pixels).
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace orchard {
+
+// Component id (0..K-1, numbered by first point) of each point, where points
+// closer than `link_distance` are connected (single linkage, via a hash grid
+// of cells of that size). `num_components` gets K.
+std::vector<int> ConnectedComponents3D(const std::vector<Eigen::Vector3d>& points, double link_distance,
+                                       int* num_components = nullptr);
+
+// A cluster as seen in one frame: the blobs it is assigned there, their fruit
+// pixels and the apples counted in them.
+struct ClusterView {
+  int frame = 0;
+  int pixels = 0;
+  int count = 0;
+};
+
+// The median of the counts of the `k` views with the most pixels (ties:
+// the earlier frame first); with an even number of views, the upper median.
+// `chosen` gets the frames used. 0 when there are no views.
+int MedianOfBestViews(std::vector<ClusterView> views, int k = 3, std::vector<int>* chosen = nullptr);
+
+}  // namespace orchard

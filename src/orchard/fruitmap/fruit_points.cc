@@ -1,0 +1,137 @@
+#include "orchard/fruitmap/fruit_points.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "orchard/core/error.h"
+#include "orchard/fruitmap/triangulation.h"
+
+namespace orchard {
+namespace {
+
+Eigen::Vector2d Centre(const Blob& b) {
+  // Blob centroids are in OpenCV pixel indices; views use COLMAP's +0.5.
+  return {b.centroid.x + 0.5, b.centroid.y + 0.5};
+}
+
+// Blob under the projection of X into frame f (0 = none or outside).
+int BlobAt(const CameraView& view, const FruitFrame& frame, const Eigen::Vector3d& X) {
+  Eigen::Vector2d p;
+  if (!view.Project(X, &p)) return -1;
+  return frame.labels(static_cast<int>(p.y()), static_cast<int>(p.x()));
+}
+
+struct Support {
+  int in_image = 0, hits = 0;
+  std::vector<std::pair<int, int>> blobs;  // (frame, blob id) hit
+};
+
+Support CheckSupport(const std::vector<CameraView>& views, const std::vector<FruitFrame>& frames,
+                     const Eigen::Vector3d& X, int centre, const FruitPointOptions& o) {
+  Support s;
+  const int n = static_cast<int>(frames.size());
+  for (int f = std::max(0, centre - o.support_window); f <= std::min(n - 1, centre + o.support_window); ++f) {
+    const double z = views[f].Depth(X);
+    if (z < o.min_depth || z > o.max_depth) continue;
+    const int id = BlobAt(views[f], frames[f], X);
+    if (id < 0) continue;
+    ++s.in_image;
+    if (id > 0) ++s.hits, s.blobs.emplace_back(f, id);
+  }
+  return s;
+}
+
+bool Accept(const Support& s, const FruitPointOptions& o) {
+  return s.hits >= o.min_support && s.hits >= o.min_support_ratio * s.in_image;
+}
+
+// Fundamental matrix from view a to view b: x_b^T F x_a = 0 (pixels, no distortion).
+Eigen::Matrix3d Fundamental(const CameraView& a, const CameraView& b) {
+  const Eigen::Matrix3d R = b.R * a.R.transpose();
+  const Eigen::Vector3d t = b.t - R * a.t;
+  Eigen::Matrix3d tx;
+  tx << 0, -t.z(), t.y(), t.z(), 0, -t.x(), -t.y(), t.x(), 0;
+  Eigen::Matrix3d Ka, Kb;
+  Ka << a.fx, 0, a.cx, 0, a.fy, a.cy, 0, 0, 1;
+  Kb << b.fx, 0, b.cx, 0, b.fy, b.cy, 0, 0, 1;
+  return Kb.inverse().transpose() * tx * R * Ka.inverse();
+}
+
+}  // namespace
+
+void FruitPointOptions::Check() const {
+  ORCHARD_CHECK_OPTION(min_partner_offset >= 1 && max_partner_offset >= min_partner_offset,
+                       "partner offsets must satisfy 1 <= min <= max, got ", min_partner_offset, "..",
+                       max_partner_offset);
+  ORCHARD_CHECK_OPTION(support_window >= 1, "support window must be at least 1, got ", support_window);
+  ORCHARD_CHECK_OPTION(max_error_fraction > 0 && max_error_fraction < 0.5, "max error fraction must be in (0, 0.5), got ",
+                       max_error_fraction);
+  ORCHARD_CHECK_OPTION(min_support >= 2, "min support must be at least 2, got ", min_support);
+  ORCHARD_CHECK_OPTION(min_support_ratio > 0 && min_support_ratio <= 1, "min support ratio must be in (0, 1], got ",
+                       min_support_ratio);
+  ORCHARD_CHECK_OPTION(min_depth > 0 && max_depth > min_depth, "depth range must satisfy 0 < min < max, got ",
+                       min_depth, "..", max_depth);
+}
+
+std::vector<FruitPoint> TriangulateFruitPoints(const std::vector<CameraView>& views,
+                                               const std::vector<FruitFrame>& frames, const FruitPointOptions& o) {
+  o.Check();
+  if (views.size() != frames.size()) Fail("fruit points: ", views.size(), " views but ", frames.size(), " frames");
+  std::vector<FruitPoint> points;
+  const int n = static_cast<int>(frames.size());
+  for (int i = 0; i < n; ++i) {
+    const double tol = o.max_error_fraction * views[i].width;
+    for (const Blob& blob : frames[i].blobs) {
+      const Eigen::Vector2d pi = Centre(blob);
+      const Eigen::Vector3d hi(pi.x(), pi.y(), 1);
+      bool found = false;
+      FruitPoint best;
+      double best_error = 0;
+      for (int j = i + o.min_partner_offset; j <= std::min(n - 1, i + o.max_partner_offset); ++j) {
+        const Eigen::Matrix3d F = Fundamental(views[i], views[j]);
+        const Eigen::Vector3d line = F * hi;
+        const double line_norm = line.head<2>().norm();
+        if (line_norm < 1e-12) continue;
+        for (const Blob& other : frames[j].blobs) {
+          const Eigen::Vector2d pj = Centre(other);
+          if (std::abs(line.dot(Eigen::Vector3d(pj.x(), pj.y(), 1))) / line_norm > tol) continue;
+          Eigen::Vector3d X;
+          if (!TriangulatePoint({&views[i], &views[j]}, {pi, pj}, &X)) continue;
+          if (views[i].Depth(X) < o.min_depth || views[i].Depth(X) > o.max_depth) continue;
+          if (views[j].Depth(X) < o.min_depth) continue;
+          Support s = CheckSupport(views, frames, X, i, o);
+          if (!Accept(s, o)) continue;
+          // Refine on the centres of all blobs the point lands on; drop the
+          // centres that disagree (a different apple's blob) and re-check.
+          for (int round = 0; round < 2; ++round) {
+            std::vector<const CameraView*> vs;
+            std::vector<Eigen::Vector2d> ps;
+            for (const auto& [f, id] : s.blobs) {
+              const Eigen::Vector2d c = Centre(*frames[f].FindBlob(id));
+              if (round > 0 && ReprojectionError(views[f], X, c) > tol) continue;
+              vs.push_back(&views[f]), ps.push_back(c);
+            }
+            Eigen::Vector3d Y;
+            if (vs.size() < 2 || !TriangulatePoint(vs, ps, &Y)) break;
+            X = Y;
+          }
+          s = CheckSupport(views, frames, X, i, o);
+          // The blob itself must still be hit.
+          if (!Accept(s, o) || BlobAt(views[i], frames[i], X) != blob.id) continue;
+          double error = 0;
+          for (const auto& [f, id] : s.blobs) error += ReprojectionError(views[f], X, Centre(*frames[f].FindBlob(id)));
+          error /= s.hits;
+          if (!found || s.hits > best.support || (s.hits == best.support && error < best_error)) {
+            found = true;
+            best = {X, i, blob.id, s.hits};
+            best_error = error;
+          }
+        }
+      }
+      if (found) points.push_back(best);
+    }
+  }
+  return points;
+}
+
+}  // namespace orchard

@@ -1,0 +1,59 @@
+// Fruit in 3D from per-frame fruit blobs and known poses: each blob centre is
+// matched to blob centres in frames a few steps ahead (within an epipolar
+// tolerance), the pair is triangulated, and the point is kept only when it
+// projects onto fruit in most frames around it that see it (the consistency
+// check that rejects wrong pairings); kept points are refined by triangulating
+// the centres of all blobs they project onto.
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "orchard/detect/detector.h"
+#include "orchard/sfm/camera_view.h"
+
+namespace orchard {
+
+// One frame's fruit: blob id per pixel, the blobs and the apples counted in each.
+struct FruitFrame {
+  cv::Mat1i labels;          // blob id per pixel (0 = none), frame size
+  std::vector<Blob> blobs;   // ids 1..N in order
+  std::vector<int> counts;   // apples per blob (same order as blobs)
+  const Blob* FindBlob(int id) const { return id >= 1 && id <= static_cast<int>(blobs.size()) ? &blobs[id - 1] : nullptr; }
+};
+
+struct FruitPointOptions {
+  // Partner frames for the first triangulation: this many frames ahead (a
+  // longer baseline gives better depth, a shorter one more overlap).
+  int min_partner_offset = 2;
+  int max_partner_offset = 4;
+  // Consistency check over the frames within this many of the blob's frame.
+  int support_window = 6;
+  // Largest distance (pixels) of a blob centre from its match's epipolar line
+  // and of a refined point's reprojection from a supporting blob centre,
+  // as a fraction of the image width (1% = ~10 px at 960 px).
+  double max_error_fraction = 0.01;
+  // A point is kept when it lands on fruit in at least this many frames and
+  // in at least this fraction of the frames whose image it falls into.
+  int min_support = 4;
+  double min_support_ratio = 0.6;
+  // Depth range in front of the cameras (scene units: metres once scaled).
+  double min_depth = 0.3;
+  double max_depth = 15;
+  void Check() const;
+};
+
+struct FruitPoint {
+  Eigen::Vector3d xyz = Eigen::Vector3d::Zero();
+  int frame = 0;    // index of the frame of the blob it came from
+  int blob_id = 0;
+  int support = 0;  // frames where it lands on fruit
+};
+
+// `views[i]` and `frames[i]` are the same frame; frames are in sequence order.
+std::vector<FruitPoint> TriangulateFruitPoints(const std::vector<CameraView>& views,
+                                               const std::vector<FruitFrame>& frames, const FruitPointOptions& options);
+
+}  // namespace orchard

@@ -1,0 +1,159 @@
+#include <random>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include "orchard/core/error.h"
+#include "orchard/fruitmap/clusters.h"
+#include "orchard/fruitmap/fruit_points.h"
+#include "orchard/fruitmap/side.h"
+#include "orchard/fruitmap/triangulation.h"
+
+namespace orchard {
+namespace {
+
+// A camera at (x, -2.5, 1.5) looking along +y (world z up), 640x480, f = 500.
+CameraView ViewAt(double x) {
+  CameraView v;
+  v.name = "f";
+  v.width = 640, v.height = 480;
+  v.fx = v.fy = 500, v.cx = 320, v.cy = 240;
+  // Camera axes in world: x_cam = +x, y_cam = -z (down), z_cam = +y.
+  v.R << 1, 0, 0, 0, 0, -1, 0, 1, 0;
+  v.t = -v.R * Eigen::Vector3d(x, -2.5, 1.5);
+  return v;
+}
+
+TEST(Triangulation, RecoversKnownPointFromManyViews) {
+  const Eigen::Vector3d X(0.3, 0.2, 1.8);
+  std::vector<CameraView> views;
+  for (int i = 0; i < 6; ++i) views.push_back(ViewAt(-0.4 + 0.15 * i));
+  std::vector<const CameraView*> vs;
+  std::vector<Eigen::Vector2d> px;
+  for (const auto& v : views) {
+    Eigen::Vector2d p;
+    ASSERT_TRUE(v.Project(X, &p));
+    vs.push_back(&v), px.push_back(p);
+  }
+  Eigen::Vector3d Y;
+  ASSERT_TRUE(TriangulatePoint(vs, px, &Y));
+  EXPECT_LT((Y - X).norm(), 1e-9);
+  EXPECT_LT(ReprojectionError(views[2], Y, px[2]), 1e-6);
+  // One pixel of noise in each view moves the point by millimetres, not centimetres.
+  for (size_t i = 0; i < px.size(); ++i) px[i].x() += (i % 2 ? 1 : -1);
+  ASSERT_TRUE(TriangulatePoint(vs, px, &Y));
+  EXPECT_LT((Y - X).norm(), 0.02);
+  // A single view, or two views from one place, cannot triangulate.
+  EXPECT_FALSE(TriangulatePoint({vs[0]}, {px[0]}, &Y));
+  EXPECT_FALSE(TriangulatePoint({vs[0], vs[0]}, {px[0], px[0]}, &Y));
+}
+
+TEST(Triangulation, RadialDistortionRoundTrips) {
+  CameraView v = ViewAt(0);
+  v.k1 = -0.08;
+  const Eigen::Vector3d X(0.5, 0.1, 2.2);
+  Eigen::Vector2d p;
+  ASSERT_TRUE(v.Project(X, &p));
+  const Eigen::Vector2d n = v.Normalize(p);
+  const Eigen::Vector3d x = v.R * X + v.t;
+  EXPECT_NEAR(n.x(), x.x() / x.z(), 1e-9);
+  EXPECT_NEAR(n.y(), x.y() / x.z(), 1e-9);
+}
+
+TEST(ConnectedComponents3D, LinksChainsAndSeparatesGaps) {
+  // Chain a: 0 - 1 - 2 (steps 4 cm), b: two points 30 cm away, c: alone.
+  const std::vector<Eigen::Vector3d> pts = {{0, 0, 0},     {0.04, 0, 0},  {0.08, 0, 0},
+                                            {0.4, 0, 0},   {0.4, 0.03, 0}, {1, 1, 1}};
+  int k = 0;
+  const std::vector<int> label = ConnectedComponents3D(pts, 0.05, &k);
+  EXPECT_EQ(k, 3);
+  EXPECT_EQ(label, (std::vector<int>{0, 0, 0, 1, 1, 2}));
+  // A shorter link breaks the chain.
+  ConnectedComponents3D(pts, 0.035, &k);
+  EXPECT_EQ(k, 5);  // only the 3 cm pair stays linked
+  // Cell boundaries and negative coordinates do not split neighbours.
+  ConnectedComponents3D({{-0.001, -0.001, -0.001}, {0.001, 0.001, 0.001}}, 0.05, &k);
+  EXPECT_EQ(k, 1);
+  EXPECT_THROW(ConnectedComponents3D(pts, 0, &k), Error);
+}
+
+TEST(MedianOfBestViews, UsesTheThreeViewsWithMostPixels) {
+  // Most pixels: frames 4 (900, count 3), 2 (800, count 2), 7 (700, count 5);
+  // the partly hidden views with counts 1 are ignored.
+  std::vector<ClusterView> views = {{1, 100, 1}, {2, 800, 2}, {3, 200, 1}, {4, 900, 3}, {7, 700, 5}, {9, 50, 1}};
+  std::vector<int> chosen;
+  EXPECT_EQ(MedianOfBestViews(views, 3, &chosen), 3);
+  EXPECT_EQ(chosen, (std::vector<int>{4, 2, 7}));
+  EXPECT_EQ(MedianOfBestViews(views, 1), 3);
+  EXPECT_EQ(MedianOfBestViews({{1, 10, 2}, {2, 20, 4}}, 3), 4);  // even: upper median
+  EXPECT_EQ(MedianOfBestViews({}, 3), 0);
+  EXPECT_THROW(MedianOfBestViews(views, 0), Error);
+}
+
+// Frames of 3D balls (radius r) rendered as discs into label images.
+std::vector<FruitFrame> RenderBalls(const std::vector<CameraView>& views, const std::vector<Eigen::Vector3d>& balls,
+                                    double r) {
+  std::vector<FruitFrame> frames;
+  for (const auto& v : views) {
+    FruitFrame f;
+    f.labels = cv::Mat1i::zeros(v.height, v.width);
+    for (const auto& b : balls) {
+      Eigen::Vector2d p;
+      if (!v.Project(b, &p)) continue;
+      const double rad = v.fx * r / v.Depth(b);
+      const int id = static_cast<int>(f.blobs.size()) + 1;
+      cv::Mat1b disc = cv::Mat1b::zeros(f.labels.size());
+      cv::circle(disc, cv::Point(static_cast<int>(p.x()), static_cast<int>(p.y())), static_cast<int>(rad), 255, -1);
+      f.labels.setTo(id, disc);
+      Blob blob;
+      blob.id = id;
+      blob.pixels = cv::countNonZero(disc);
+      blob.centroid = {std::floor(p.x()), std::floor(p.y())};
+      f.blobs.push_back(blob);
+      f.counts.push_back(1);
+    }
+    frames.push_back(f);
+  }
+  return frames;
+}
+
+TEST(CountFruitClusters, CountsEachBallOnceAndRemovesFallenAndNextRow) {
+  std::vector<CameraView> views;
+  for (int i = 0; i < 16; ++i) views.push_back(ViewAt(-0.5 + 0.1 * i));
+  // Three apples on the tree, one fallen (on the ground, far enough to be in view) and one in the next
+  // row 6 m from the cameras.
+  const std::vector<Eigen::Vector3d> balls = {
+      {-0.2, 0, 1.2}, {0.3, -0.1, 1.6}, {0.7, 0.1, 2.0}, {0.2, 1.0, 0.04}, {0.4, 3.5, 1.4}};
+  const std::vector<FruitFrame> frames = RenderBalls(views, balls, 0.04);
+  Plane ground;  // z = 0
+  ClusterOptions o;
+  const ClusterResult r = CountFruitClusters(views, frames, ground, o);
+  std::map<std::string, int> status;
+  for (const auto& c : r.clusters) status[c.status] += c.count;
+  EXPECT_EQ(r.count, 3);
+  EXPECT_EQ(status["kept"], 3);
+  EXPECT_EQ(status["fallen"], 1);
+  EXPECT_EQ(status["next_row"], 1);
+  for (const auto& c : r.clusters) {
+    if (c.status != "kept") continue;
+    double nearest = 1e9;
+    for (const auto& b : balls) nearest = std::min(nearest, (c.centre - b).norm());
+    EXPECT_LT(nearest, 0.02);
+  }
+  int seen = 0;
+  for (const auto& f : frames) seen += static_cast<int>(f.blobs.size());
+  EXPECT_EQ(r.single_frame_sum, seen);
+  EXPECT_GT(r.single_frame_sum, 3 * r.count);
+}
+
+TEST(ParseGroundPlane, NumbersAndErrors) {
+  const Plane p = ParseGroundPlane("0,0,2,-1");
+  EXPECT_NEAR(p.normal.z(), 1, 1e-12);
+  EXPECT_NEAR(p.d, -0.5, 1e-12);
+  EXPECT_THROW(ParseGroundPlane("0,0,1"), Error);
+  EXPECT_THROW(ParseGroundPlane("a,b,c,d"), Error);
+  EXPECT_THROW(ParseGroundPlane("0,0,0,1"), Error);
+}
+
+}  // namespace
+}  // namespace orchard

@@ -1,0 +1,466 @@
+#include "orchard/fruitmap/side.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include <Eigen/Eigenvalues>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <spdlog/spdlog.h>
+
+#include "orchard/core/error.h"
+#include "orchard/core/file_io.h"
+#include "orchard/core/frame_source.h"
+
+namespace orchard {
+namespace {
+
+using Json = nlohmann::json;
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+// Unit vectors along the camera path and across it (towards the row), both
+// in the ground plane.
+void PathAxes(const std::vector<CameraView>& views, const Plane& ground, Eigen::Vector3d* mean, Eigen::Vector3d* along,
+              Eigen::Vector3d* across) {
+  const Eigen::Vector3d n = ground.normal;
+  *mean = Eigen::Vector3d::Zero();
+  Eigen::Vector3d forward = Eigen::Vector3d::Zero();
+  for (const auto& v : views) *mean += v.Center(), forward += v.Forward();
+  *mean /= static_cast<double>(views.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (const auto& v : views) cov += (v.Center() - *mean) * (v.Center() - *mean).transpose();
+  Eigen::Vector3d u = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvectors().col(2);
+  u -= n * n.dot(u);
+  Eigen::Vector3d f = forward - n * n.dot(forward);
+  if (u.norm() < 1e-9) u = n.cross(f);  // a single camera position: across = viewing direction
+  u.normalize();
+  f -= u * u.dot(f);
+  if (f.norm() < 1e-9) Fail("the cameras look along their path; cannot tell the row's side");
+  *along = u, *across = f.normalized();
+}
+
+}  // namespace
+
+void ClusterOptions::Check() const {
+  points.Check();
+  ORCHARD_CHECK_OPTION(link_distance > 0, "link distance must be positive, got ", link_distance);
+  ORCHARD_CHECK_OPTION(min_points >= 1, "min cluster points must be at least 1, got ", min_points);
+  ORCHARD_CHECK_OPTION(best_views >= 1, "best views must be at least 1, got ", best_views);
+  ORCHARD_CHECK_OPTION(row_distance >= 0, "row distance must be >= 0, got ", row_distance);
+  ORCHARD_CHECK_OPTION(next_row_margin > 0, "next-row margin must be positive, got ", next_row_margin);
+}
+
+ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std::vector<FruitFrame>& frames,
+                                 const Plane& ground, const ClusterOptions& o) {
+  o.Check();
+  if (views.size() != frames.size()) Fail("clusters: ", views.size(), " views but ", frames.size(), " frames");
+  if (views.size() < 2) Fail("clusters: need at least two frames, got ", views.size());
+  ClusterResult r;
+  for (const auto& f : frames)
+    for (int c : f.counts) r.single_frame_sum += c;
+  r.points = TriangulateFruitPoints(views, frames, o.points);
+  std::vector<Eigen::Vector3d> xyz;
+  for (const auto& p : r.points) xyz.push_back(p.xyz);
+  int k = 0;
+  r.point_cluster = ConnectedComponents3D(xyz, o.link_distance, &k);
+  r.clusters.resize(k);
+  for (int c = 0; c < k; ++c) r.clusters[c].id = c + 1;
+  for (size_t i = 0; i < xyz.size(); ++i) r.clusters[r.point_cluster[i]].points.push_back(static_cast<int>(i));
+  for (auto& c : r.clusters) {
+    c.min = c.max = xyz[c.points[0]];
+    for (int i : c.points) {
+      c.centre += xyz[i];
+      c.min = c.min.cwiseMin(xyz[i]), c.max = c.max.cwiseMax(xyz[i]);
+    }
+    c.centre /= static_cast<double>(c.points.size());
+  }
+  // Each blob of each frame goes to the cluster with most points landing on it.
+  const int n = static_cast<int>(frames.size());
+  for (int f = 0; f < n; ++f) {
+    std::map<int, std::map<int, int>> votes;  // blob -> cluster -> points
+    for (size_t i = 0; i < xyz.size(); ++i) {
+      if (static_cast<int>(r.clusters[r.point_cluster[i]].points.size()) < o.min_points) continue;
+      Eigen::Vector2d p;
+      if (views[f].Depth(xyz[i]) < o.points.min_depth || !views[f].Project(xyz[i], &p)) continue;
+      const int id = frames[f].labels(static_cast<int>(p.y()), static_cast<int>(p.x()));
+      if (id > 0) ++votes[id][r.point_cluster[i]];
+    }
+    std::map<int, size_t> view_of;  // cluster -> index in its views
+    for (const auto& [blob, by_cluster] : votes) {
+      const auto best = std::max_element(by_cluster.begin(), by_cluster.end(),
+                                         [](const auto& a, const auto& b) { return a.second < b.second; });
+      FruitCluster& c = r.clusters[best->first];
+      if (!view_of.count(best->first)) {
+        view_of[best->first] = c.views.size();
+        c.views.push_back({f, 0, 0});
+        c.view_blobs.emplace_back();
+      }
+      const size_t v = view_of[best->first];
+      const Blob* b = frames[f].FindBlob(blob);
+      c.views[v].pixels += b->pixels;
+      c.views[v].count += frames[f].counts[blob - 1];
+      c.view_blobs[v].push_back(blob);
+    }
+  }
+  Eigen::Vector3d mean, along, across;
+  PathAxes(views, ground, &mean, &along, &across);
+  std::vector<double> tree_distances;
+  for (auto& c : r.clusters) {
+    c.count = MedianOfBestViews(c.views, o.best_views, &c.count_frames);
+    c.height = ground.SignedDistance(c.centre);
+    c.distance = across.dot(c.centre - mean);
+    if (static_cast<int>(c.points.size()) < o.min_points)
+      c.status = "too_few_points";
+    else if (c.count == 0)
+      c.status = "no_views";
+    else if (c.height < o.fallen_height)
+      c.status = "fallen";
+    else
+      tree_distances.push_back(c.distance);
+  }
+  r.row_distance = o.row_distance > 0 ? o.row_distance : Median(tree_distances);
+  r.depth_cutoff = r.row_distance + o.next_row_margin;
+  for (auto& c : r.clusters) {
+    if (c.status == "kept" && (c.distance > r.depth_cutoff || c.distance < 0.3)) c.status = "next_row";
+    if (c.status == "kept") r.count += c.count;
+  }
+  return r;
+}
+
+Plane ParseGroundPlane(const std::string& text) {
+  Plane plane;
+  if (fs::is_regular_file(text)) {
+    try {
+      const Json j = Json::parse(ReadTextFile(text));
+      const Json& g = j.contains("ground_plane") ? j.at("ground_plane") : j;
+      const auto n = g.at("normal").get<std::vector<double>>();
+      if (n.size() != 3) Fail("ground plane normal in ", text, " must have 3 numbers");
+      plane.normal = {n[0], n[1], n[2]};
+      plane.d = g.at("d").get<double>();
+    } catch (const Json::exception& e) {
+      Fail("cannot read a ground plane {\"normal\": [nx, ny, nz], \"d\": d} from ", text, ": ", e.what());
+    }
+  } else {
+    std::vector<double> v;
+    std::stringstream in(text);
+    std::string item;
+    while (std::getline(in, item, ',')) {
+      try {
+        size_t used = 0;
+        v.push_back(std::stod(item, &used));
+        if (used != item.size()) v.clear();
+      } catch (const std::exception&) {
+        Fail("ground plane '", text, "' is neither a file nor four numbers nx,ny,nz,d");
+      }
+    }
+    if (v.size() != 4) Fail("ground plane '", text, "' is neither a file nor four numbers nx,ny,nz,d");
+    plane.normal = {v[0], v[1], v[2]};
+    plane.d = v[3];
+  }
+  const double len = plane.normal.norm();
+  if (!(len > 0)) Fail("ground plane normal must not be zero");
+  plane.normal /= len, plane.d /= len;
+  return plane;
+}
+
+void SideOptions::Check() const {
+  frames.Check();
+  colmap.Check();
+  ground.Check();
+  clusters.Check();
+  ORCHARD_CHECK_OPTION(camera_height > 0, "camera height must be positive, got ", camera_height);
+  ORCHARD_CHECK_OPTION(draw_every >= 0, "draw every must be >= 0, got ", draw_every);
+}
+
+namespace {
+
+// Frame-local blob ids 1..N (raster order of first pixel) from an instance
+// mask, so nothing of the mask's own numbering carries across frames.
+FruitFrame FruitFromInstanceMask(const cv::Mat& mask) {
+  cv::Mat ids;
+  mask.convertTo(ids, CV_32S);
+  FruitFrame frame;
+  frame.labels = cv::Mat1i::zeros(ids.size());
+  std::map<int, int> local;
+  struct Acc { double sx = 0, sy = 0; int n = 0, x0 = 1 << 30, y0 = 1 << 30, x1 = -1, y1 = -1; };
+  std::vector<Acc> acc;
+  for (int y = 0; y < ids.rows; ++y)
+    for (int x = 0; x < ids.cols; ++x) {
+      const int id = ids.at<int>(y, x);
+      if (id == 0) continue;
+      auto it = local.find(id);
+      if (it == local.end()) it = local.emplace(id, static_cast<int>(local.size()) + 1).first, acc.emplace_back();
+      frame.labels(y, x) = it->second;
+      Acc& a = acc[it->second - 1];
+      a.sx += x, a.sy += y, ++a.n;
+      a.x0 = std::min(a.x0, x), a.y0 = std::min(a.y0, y), a.x1 = std::max(a.x1, x), a.y1 = std::max(a.y1, y);
+    }
+  for (size_t i = 0; i < acc.size(); ++i) {
+    Blob b;
+    b.id = static_cast<int>(i) + 1;
+    b.pixels = acc[i].n;
+    b.centroid = {acc[i].sx / acc[i].n, acc[i].sy / acc[i].n};
+    b.box = Box{static_cast<double>(acc[i].x0), static_cast<double>(acc[i].y0), static_cast<double>(acc[i].x1 + 1),
+                static_cast<double>(acc[i].y1 + 1)};
+    frame.blobs.push_back(b);
+  }
+  return frame;
+}
+
+void CountBlobs(const cv::Mat& image, Counter* counter, FruitFrame* frame) {
+  frame->counts.assign(frame->blobs.size(), 1);
+  if (!counter) return;
+  for (size_t i = 0; i < frame->blobs.size(); ++i) {
+    const Blob& b = frame->blobs[i];
+    const cv::Rect rect(static_cast<int>(b.box.x1), static_cast<int>(b.box.y1),
+                        static_cast<int>(b.box.x2 - b.box.x1), static_cast<int>(b.box.y2 - b.box.y1));
+    const cv::Mat1b fruit = frame->labels(rect) == b.id;
+    frame->counts[i] = counter->Count(image(rect).clone(), fruit).count;
+  }
+}
+
+// Detections and counts of one frame, from the cache when it was made by the
+// same detector and counter.
+FruitFrame FrameFruit(const SideInputs& in, const fs::path& image_path, const fs::path& cache_dir) {
+  const std::string stem = image_path.stem().string();
+  const fs::path cache_png = cache_dir / (stem + ".png"), cache_json = cache_dir / (stem + ".json");
+  if (fs::exists(cache_png) && fs::exists(cache_json)) {
+    const Json j = Json::parse(ReadTextFile(cache_json), nullptr, false);
+    if (!j.is_discarded() && j.value("detector", "") == in.detector_name && j.value("counter", "") == in.counter_name) {
+      FruitFrame frame = FruitFromInstanceMask(ReadImage(cache_png, cv::IMREAD_UNCHANGED));
+      const auto counts = j.at("counts").get<std::vector<int>>();
+      if (counts.size() == frame.blobs.size()) {
+        frame.counts = counts;
+        return frame;
+      }
+    }
+  }
+  const cv::Mat image = ReadImage(image_path);
+  FruitFrame frame;
+  if (in.detector) {
+    const FrameDetection d = in.detector->Detect(image);
+    frame = FruitFromInstanceMask(InstanceMask(d));
+  } else {
+    const fs::path mask_path = in.masks / (stem + ".png");
+    if (!fs::exists(mask_path)) Fail("no instance mask for frame ", image_path.filename().string(), " (", mask_path.string(), ")");
+    const cv::Mat mask = ReadImage(mask_path, cv::IMREAD_UNCHANGED);
+    if (mask.size() != image.size() || mask.channels() != 1)
+      Fail("instance mask ", mask_path.string(), " must be one channel of the frame's size");
+    frame = FruitFromInstanceMask(mask);
+  }
+  CountBlobs(image, in.counter, &frame);
+  cv::Mat1w ids;
+  frame.labels.convertTo(ids, CV_16U);
+  WriteImageAtomic(cache_png, ids);
+  WriteTextFileAtomic(cache_json, Json{{"detector", in.detector_name}, {"counter", in.counter_name},
+                                       {"counts", frame.counts}}.dump() + "\n");
+  return frame;
+}
+
+cv::Scalar ClusterColour(int id) {
+  // Well-spread hues from the golden ratio.
+  const double h = std::fmod(id * 0.618033988749895, 1.0) * 180;
+  cv::Mat3b hsv(1, 1, cv::Vec3b(static_cast<uchar>(h), 220, 255)), bgr;
+  cv::cvtColor(hsv, bgr, cv::COLOR_HSV2BGR);
+  return cv::Scalar(bgr(0, 0)[0], bgr(0, 0)[1], bgr(0, 0)[2]);
+}
+
+void WriteOutputs(const fs::path& out, const std::vector<fs::path>& image_paths, const std::vector<FruitFrame>& frames,
+                  const ClusterResult& r, const SideOptions& o) {
+  std::ostringstream csv;
+  csv << "id,x,y,z,extent_x,extent_y,extent_z,points,count,status,height,distance,frames\n";
+  csv.precision(4);
+  csv << std::fixed;
+  for (const auto& c : r.clusters) {
+    const Eigen::Vector3d e = c.max - c.min;
+    csv << c.id << ',' << c.centre.x() << ',' << c.centre.y() << ',' << c.centre.z() << ',' << e.x() << ',' << e.y()
+        << ',' << e.z() << ',' << c.points.size() << ',' << c.count << ',' << c.status << ',' << c.height << ','
+        << c.distance << ',';
+    for (size_t i = 0; i < c.count_frames.size(); ++i)
+      csv << (i ? ";" : "") << image_paths[c.count_frames[i]].filename().string();
+    csv << '\n';
+  }
+  WriteTextFileAtomic(out / "clusters.csv", csv.str());
+  std::ostringstream ply;
+  ply << "ply\nformat ascii 1.0\nelement vertex " << r.points.size()
+      << "\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\nproperty uchar green\n"
+         "property uchar blue\nproperty int cluster\nend_header\n";
+  for (size_t i = 0; i < r.points.size(); ++i) {
+    const FruitCluster& c = r.clusters[r.point_cluster[i]];
+    const cv::Scalar col = c.status == "kept" ? ClusterColour(c.id) : cv::Scalar(128, 128, 128);
+    const Eigen::Vector3d& p = r.points[i].xyz;
+    ply << p.x() << ' ' << p.y() << ' ' << p.z() << ' ' << static_cast<int>(col[2]) << ' ' << static_cast<int>(col[1])
+        << ' ' << static_cast<int>(col[0]) << ' ' << c.id << '\n';
+  }
+  WriteTextFileAtomic(out / "fruit.ply", ply.str());
+  if (o.draw_every <= 0) return;
+  for (size_t f = 0; f < frames.size(); f += o.draw_every) {
+    cv::Mat image = ReadImage(image_paths[f]);
+    for (const auto& c : r.clusters) {
+      for (size_t v = 0; v < c.views.size(); ++v) {
+        if (c.views[v].frame != static_cast<int>(f)) continue;
+        const bool kept = c.status == "kept";
+        const cv::Scalar col = kept ? ClusterColour(c.id) : cv::Scalar(160, 160, 160);
+        cv::Mat1b region = cv::Mat1b::zeros(image.size());
+        for (int id : c.view_blobs[v]) region.setTo(255, frames[f].labels == id);
+        std::vector<std::vector<cv::Point>> contours;
+        cv::findContours(region, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_SIMPLE);
+        cv::drawContours(image, contours, -1, col, 2);
+        const cv::Rect box = cv::boundingRect(region);
+        const std::string label = kept ? std::to_string(c.count) : c.status.substr(0, 1);
+        cv::putText(image, label, {box.x, std::max(12, box.y - 3)}, cv::FONT_HERSHEY_SIMPLEX, 0.5, col, 2);
+      }
+    }
+    WriteImageAtomic(out / "annotated" / (image_paths[f].stem().string() + ".jpg"), image);
+  }
+}
+
+}  // namespace
+
+SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
+  o.Check();
+  if (in.out.empty()) Fail("no output folder");
+  if (!fs::exists(in.input)) Fail("input ", in.input.string(), " does not exist");
+  if (!in.detector && in.masks.empty()) Fail("give a detector or a folder of instance masks");
+  if (!in.detector && !fs::is_directory(in.masks)) Fail("masks folder ", in.masks.string(), " does not exist");
+  fs::create_directories(in.out);
+  // Frames and poses.
+  ColmapModel model;
+  std::vector<std::string> unregistered;
+  fs::path image_dir;
+  int num_frames = 0;
+  bool rescale = o.rescale_given_poses;
+  if (!in.poses.empty()) {
+    model = ReadColmapTextModel(in.poses);
+    if (fs::is_directory(in.input)) {
+      image_dir = in.input;
+    } else {
+      image_dir = in.out / "frames";
+      SelectFrames(in.input, FrameSelectionOptions{}, image_dir);
+    }
+    std::set<std::string> names;
+    for (const auto& p : ListImages(image_dir)) names.insert(p.filename().string());
+    num_frames = static_cast<int>(names.size());
+    for (const auto& [id, image] : model.images)
+      if (!names.count(image.name)) Fail("pose model ", in.poses.string(), " names frame ", image.name, ", which is not in ", image_dir.string());
+    std::set<std::string> posed;
+    for (const auto& [id, image] : model.images) posed.insert(image.name);
+    for (const auto& n : names)
+      if (!posed.count(n)) unregistered.push_back(n);
+  } else {
+    rescale = true;
+    image_dir = in.out / "frames";
+    const std::vector<std::string> names = SelectFrames(in.input, o.frames, image_dir);
+    num_frames = static_cast<int>(names.size());
+    // Remove frames of an earlier selection that this one does not keep.
+    const std::set<std::string> keep(names.begin(), names.end());
+    for (const auto& p : ListImages(image_dir))
+      if (!keep.count(p.filename().string())) fs::remove(p);
+    std::ostringstream list;
+    for (const auto& n : names) list << n << '\n';
+    const fs::path sparse = in.out / "sparse";
+    if (fs::exists(sparse / "frames.txt") && ReadTextFile(sparse / "frames.txt") == list.str()) {
+      spdlog::info("reusing the reconstruction in {}", sparse.string());
+      model = ReadColmapTextModel(sparse);
+    } else {
+      const ColmapRunResult run = RunColmap(image_dir, in.out / "colmap", o.colmap);
+      model = run.model;
+      WriteColmapTextModel(model, sparse);
+      WriteTextFileAtomic(sparse / "frames.txt", list.str());
+    }
+    std::set<std::string> posed;
+    for (const auto& [id, image] : model.images) posed.insert(image.name);
+    for (const auto& n : names)
+      if (!posed.count(n)) unregistered.push_back(n);
+  }
+  std::vector<CameraView> views = ViewsFromColmapModel(model);
+  if (static_cast<int>(views.size()) < o.colmap.min_registered)
+    Fail("only ", views.size(), " frames have poses (need ", o.colmap.min_registered, ")");
+  if (!unregistered.empty())
+    spdlog::warn("{} of {} frames have no pose and are left out", unregistered.size(), num_frames);
+  // Ground plane and scale.
+  Plane ground;
+  std::string ground_source;
+  if (in.ground) {
+    ground = *in.ground;
+    ground_source = "given";
+  } else {
+    std::vector<Eigen::Vector3d> pts, centres;
+    for (const auto& [id, p] : model.points3D) pts.push_back(p.xyz);
+    for (const auto& v : views) centres.push_back(v.Center());
+    if (static_cast<int>(pts.size()) < o.ground.min_inliers)
+      Fail("the pose model has ", pts.size(), " 3D points, too few to fit the ground plane: give the ground plane");
+    int inliers = 0;
+    ground = FitGroundPlane(pts, centres, MeanCameraUp(views), o.ground, &inliers);
+    ground_source = "fitted to " + std::to_string(inliers) + " of " + std::to_string(pts.size()) + " sparse points";
+  }
+  double scale = 1;
+  if (rescale) {
+    scale = ScaleFromCameraHeight(ground, views, o.camera_height);
+    ScaleViews(scale, &views);
+    ground.d *= scale;
+  }
+  // Fruit per frame (cached).
+  std::vector<fs::path> image_paths;
+  std::vector<FruitFrame> frames;
+  for (const auto& v : views) {
+    image_paths.push_back(image_dir / v.name);
+    frames.push_back(FrameFruit(in, image_paths.back(), in.out / "detections"));
+    if (frames.back().labels.cols != v.width || frames.back().labels.rows != v.height)
+      Fail("frame ", v.name, " is ", frames.back().labels.cols, "x", frames.back().labels.rows, ", its camera ",
+           v.width, "x", v.height);
+    if (frames.size() % 20 == 0) spdlog::info("fruit in {} of {} frames", frames.size(), views.size());
+  }
+  const ClusterResult r = CountFruitClusters(views, frames, ground, o.clusters);
+  WriteOutputs(in.out, image_paths, frames, r, o);
+  SideSummary s;
+  s.count = r.count;
+  s.single_frame_sum = r.single_frame_sum;
+  s.frames_used = static_cast<int>(views.size());
+  s.frames_registered = static_cast<int>(views.size());
+  std::map<std::string, int> removed;
+  for (const auto& c : r.clusters) {
+    if (c.status == "kept")
+      ++s.clusters_kept;
+    else
+      ++s.clusters_removed, ++removed[c.status];
+  }
+  Json warnings = Json::array();
+  if (!unregistered.empty())
+    warnings.push_back(std::to_string(unregistered.size()) + " of " + std::to_string(num_frames) +
+                       " frames have no pose and are left out");
+  if (s.clusters_kept == 0) warnings.push_back("no fruit cluster kept: the count is not meaningful");
+  const Json j = {
+      {"count", s.count},
+      {"single_frame_sum", s.single_frame_sum},
+      {"frames", {{"input", num_frames}, {"registered", s.frames_registered}, {"used", s.frames_used},
+                  {"unregistered", unregistered}}},
+      {"poses", in.poses.empty() ? "colmap" : in.poses.string()},
+      {"detector", in.detector_name},
+      {"counter", in.counter_name},
+      {"scale", scale},
+      {"ground_plane", {{"normal", {ground.normal.x(), ground.normal.y(), ground.normal.z()}}, {"d", ground.d},
+                        {"source", ground_source}}},
+      {"row_distance", r.row_distance},
+      {"depth_cutoff", r.depth_cutoff},
+      {"fruit_points", r.points.size()},
+      {"clusters", {{"total", r.clusters.size()}, {"kept", s.clusters_kept}, {"removed", removed}}},
+      {"warnings", warnings},
+  };
+  WriteTextFileAtomic(in.out / "side.json", j.dump(2) + "\n");
+  spdlog::info("{} apples in {} clusters ({} removed); single-frame sum {}", s.count, s.clusters_kept,
+               s.clusters_removed, s.single_frame_sum);
+  return s;
+}
+
+}  // namespace orchard

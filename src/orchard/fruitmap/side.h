@@ -1,0 +1,124 @@
+// One side of a row in 3D: frames -> poses (COLMAP or given) -> per-frame
+// fruit blobs and counts (cached) -> fruit points -> 3D clusters -> each
+// cluster counted once from its best views -> fallen apples and the next row
+// removed -> side.json, clusters.csv, fruit.ply and annotated frames.
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "orchard/count/counter.h"
+#include "orchard/detect/detector.h"
+#include "orchard/fruitmap/clusters.h"
+#include "orchard/fruitmap/fruit_points.h"
+#include "orchard/sfm/camera_view.h"
+#include "orchard/sfm/colmap_runner.h"
+#include "orchard/sfm/frame_selection.h"
+#include "orchard/sfm/ground_plane.h"
+
+namespace orchard {
+
+namespace fs = std::filesystem;
+
+struct ClusterOptions {
+  FruitPointOptions points;
+  // Fruit points closer than this (m) belong to one cluster: a bit more than
+  // an apple's radius, so the points of one apple join while apples a hand
+  // apart stay separate (touching apples form one cluster; the count from
+  // its views says how many).
+  double link_distance = 0.06;
+  // Fewest fruit points for a cluster (one point is a chance pairing).
+  int min_points = 2;
+  // The cluster count is the median over this many best views.
+  int best_views = 3;
+  // Clusters whose centre is less than this (m) above the ground are fallen apples.
+  double fallen_height = 0.3;
+  // Distance from the camera path to the row centre (m); 0 = the median
+  // distance of the clusters on the trees.
+  double row_distance = 0;
+  // Clusters farther from the camera path than the row distance plus this
+  // (m) belong to the next row (half the canopy thickness, 0.6 m for the
+  // default synthetic row, plus a margin); nearer than 0.3 m: not fruit.
+  double next_row_margin = 1.5;
+  void Check() const;
+};
+
+struct FruitCluster {
+  int id = 0;
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  Eigen::Vector3d min = Eigen::Vector3d::Zero(), max = Eigen::Vector3d::Zero();
+  std::vector<int> points;       // indices into the fruit points
+  std::vector<ClusterView> views;  // frames where it is assigned blobs
+  std::vector<std::vector<int>> view_blobs;  // blob ids per view (same order as views)
+  std::vector<int> count_frames;  // the best views the count came from
+  int count = 0;
+  double height = 0;    // centre above the ground (m)
+  double distance = 0;  // centre from the camera path, across the row (m)
+  std::string status = "kept";  // kept, too_few_points, no_views, fallen, next_row
+};
+
+struct ClusterResult {
+  std::vector<FruitPoint> points;
+  std::vector<int> point_cluster;  // cluster index of each point
+  std::vector<FruitCluster> clusters;
+  double row_distance = 0;
+  double depth_cutoff = 0;
+  int count = 0;            // sum over kept clusters
+  int single_frame_sum = 0; // sum of all blob counts over all frames
+};
+
+// The 3D stage on frames with known (metric) poses and a ground plane.
+ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std::vector<FruitFrame>& frames,
+                                 const Plane& ground, const ClusterOptions& options);
+
+// A ground plane given as "nx,ny,nz,d" or as a json file with
+// {"ground_plane": {"normal": [..], "d": ..}} (the generator's scene.json).
+Plane ParseGroundPlane(const std::string& text_or_file);
+
+struct SideOptions {
+  FrameSelectionOptions frames;
+  ColmapRunnerOptions colmap;
+  GroundPlaneOptions ground;
+  ClusterOptions clusters;
+  // Camera height above the ground (m), which fixes the scale of a COLMAP
+  // reconstruction (the synthetic rows film from 1.5 m).
+  double camera_height = 1.5;
+  // Given poses are taken as metric unless this is set.
+  bool rescale_given_poses = false;
+  // Annotated copies of every n-th frame (0 = none).
+  int draw_every = 5;
+  void Check() const;
+};
+
+struct SideInputs {
+  fs::path input;   // video file or folder of frames
+  fs::path out;     // output folder
+  fs::path poses;   // COLMAP text model of the frames; empty: run COLMAP
+  std::optional<Plane> ground;  // given ground plane (in the poses' frame)
+  // Fruit: instance masks (16-bit, id per apple, file stem = frame stem) or a detector.
+  fs::path masks;
+  Detector* detector = nullptr;
+  std::string detector_name = "masks";
+  // Apples per blob: a counter, or one per blob when null.
+  Counter* counter = nullptr;
+  std::string counter_name = "blob";
+};
+
+struct SideSummary {
+  int count = 0;
+  int single_frame_sum = 0;
+  int frames_used = 0, frames_registered = 0;
+  int clusters_kept = 0, clusters_removed = 0;
+};
+
+// Runs the side end to end and writes side.json, clusters.csv, fruit.ply,
+// annotated/ frames, and the caches (frames/, sparse/, detections/) into
+// inputs.out. Throws orchard::Error with the reason when the input or the
+// reconstruction cannot give a count.
+SideSummary RunSide(const SideInputs& inputs, const SideOptions& options);
+
+}  // namespace orchard

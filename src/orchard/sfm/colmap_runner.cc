@@ -1,0 +1,106 @@
+#include "orchard/sfm/colmap_runner.h"
+
+#include <algorithm>
+#include <cstdlib>
+#include <set>
+
+#include <spdlog/spdlog.h>
+
+#include "orchard/core/error.h"
+#include "orchard/core/file_io.h"
+
+namespace orchard {
+namespace {
+
+std::string Quote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+void RunStep(const std::string& what, const std::string& command, const fs::path& log) {
+  spdlog::info("colmap {}", what);
+  const std::string full = command + " >> " + Quote(log.string()) + " 2>&1";
+  if (std::system(full.c_str()) != 0) Fail("colmap ", what, " failed (see ", log.string(), ")");
+}
+
+}  // namespace
+
+void ColmapRunnerOptions::Check() const {
+  ORCHARD_CHECK_OPTION(!colmap.empty(), "colmap executable must be named");
+  ORCHARD_CHECK_OPTION(camera_model == "PINHOLE" || camera_model == "SIMPLE_PINHOLE" ||
+                           camera_model == "SIMPLE_RADIAL" || camera_model == "RADIAL",
+                       "camera model must be SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL or RADIAL, got ", camera_model);
+  ORCHARD_CHECK_OPTION(max_num_features > 0, "max_num_features must be positive, got ", max_num_features);
+  ORCHARD_CHECK_OPTION(overlap >= 1, "matching overlap must be at least 1, got ", overlap);
+  ORCHARD_CHECK_OPTION(min_registered >= 2, "min registered frames must be at least 2, got ", min_registered);
+}
+
+bool ColmapAvailable(const std::string& colmap) {
+  return std::system((Quote(colmap) + " help > /dev/null 2>&1").c_str()) == 0;
+}
+
+ColmapRunResult RunColmap(const fs::path& image_dir, const fs::path& workspace, const ColmapRunnerOptions& options) {
+  options.Check();
+  const std::vector<fs::path> images = ListImages(image_dir);
+  if (static_cast<int>(images.size()) < options.min_registered)
+    Fail("only ", images.size(), " frames in ", image_dir.string(), ", structure from motion needs at least ",
+         options.min_registered, " (too few frames)");
+  if (!ColmapAvailable(options.colmap))
+    Fail("the colmap program '", options.colmap, "' cannot be run (install colmap, or give poses with --poses)");
+  // A fresh workspace: a database from an earlier, different run would be reused.
+  fs::remove_all(workspace);
+  fs::create_directories(workspace / "sparse");
+  const fs::path log = workspace / "colmap.log";
+  const std::string db = Quote((workspace / "database.db").string());
+  const std::string exe = Quote(options.colmap);
+  RunStep("feature_extractor",
+          exe + " feature_extractor --database_path " + db + " --image_path " + Quote(image_dir.string()) +
+              " --ImageReader.camera_model " + options.camera_model +
+              " --ImageReader.single_camera 1 --SiftExtraction.use_gpu 0 --SiftExtraction.max_num_features " +
+              std::to_string(options.max_num_features) +
+              " --SiftExtraction.first_octave " + std::to_string(options.first_octave),
+          log);
+  RunStep("sequential_matcher",
+          exe + " sequential_matcher --database_path " + db +
+              " --SiftMatching.use_gpu 0 --SequentialMatching.overlap " + std::to_string(options.overlap),
+          log);
+  RunStep("mapper",
+          exe + " mapper --database_path " + db + " --image_path " + Quote(image_dir.string()) + " --output_path " +
+              Quote((workspace / "sparse").string()),
+          log);
+  ColmapRunResult result;
+  result.num_input_images = static_cast<int>(images.size());
+  std::vector<fs::path> models;
+  for (const auto& entry : fs::directory_iterator(workspace / "sparse"))
+    if (entry.is_directory()) models.push_back(entry.path());
+  std::sort(models.begin(), models.end());
+  result.num_models = static_cast<int>(models.size());
+  if (models.empty())
+    Fail("COLMAP registered no frames of ", image_dir.string(),
+         " (too little texture or too little motion between frames; see ", log.string(), ")");
+  for (const fs::path& m : models) {
+    const fs::path txt = workspace / ("text_" + m.filename().string());
+    fs::create_directories(txt);
+    RunStep("model_converter",
+            exe + " model_converter --input_path " + Quote(m.string()) + " --output_path " + Quote(txt.string()) +
+                " --output_type TXT",
+            log);
+    ColmapModel model = ReadColmapTextModel(txt);
+    if (model.images.size() > result.model.images.size()) result.model = std::move(model), result.model_dir = txt;
+  }
+  std::set<std::string> registered;
+  for (const auto& [id, image] : result.model.images) registered.insert(image.name);
+  for (const fs::path& p : images)
+    if (!registered.count(p.filename().string())) result.unregistered.push_back(p.filename().string());
+  const int n = static_cast<int>(registered.size());
+  if (n < options.min_registered)
+    Fail("COLMAP registered only ", n, " of ", images.size(), " frames (need ", options.min_registered,
+         "): too little texture or too little motion between frames");
+  if (!result.unregistered.empty())
+    spdlog::warn("COLMAP left {} of {} frames out of the largest of {} model(s)", result.unregistered.size(),
+                 images.size(), result.num_models);
+  return result;
+}
+
+}  // namespace orchard

@@ -1,0 +1,74 @@
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "orchard/core/error.h"
+#include "orchard/core/file_io.h"
+#include "orchard/sfm/colmap_runner.h"
+#include "orchard/sfm/frame_selection.h"
+
+namespace orchard {
+namespace {
+
+std::string Message(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+fs::path TempDir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("orchard_sfm_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+TEST(ColmapRunner, TooFewFramesAndMissingProgram) {
+  const fs::path dir = TempDir("few");
+  for (int i = 0; i < 3; ++i)
+    cv::imwrite((dir / ("f" + std::to_string(i) + ".png")).string(), cv::Mat3b(32, 32, cv::Vec3b(i, i, i)));
+  ColmapRunnerOptions o;
+  EXPECT_NE(Message([&] { RunColmap(dir, dir / "ws", o); }).find("too few frames"), std::string::npos);
+  o.min_registered = 2;
+  o.colmap = "/nonexistent/colmap";
+  EXPECT_NE(Message([&] { RunColmap(dir, dir / "ws", o); }).find("cannot be run"), std::string::npos);
+  o.camera_model = "FISHEYE";
+  EXPECT_NE(Message([&] { RunColmap(dir, dir / "ws", o); }).find("camera model"), std::string::npos);
+  fs::remove_all(dir);
+}
+
+TEST(ColmapModel, MissingFilesNameThePath) {
+  const fs::path dir = TempDir("model");
+  const std::string m = Message([&] { ReadColmapTextModel(dir); });
+  EXPECT_NE(m.find("cameras.txt"), std::string::npos) << m;
+  fs::remove_all(dir);
+}
+
+TEST(FrameSelection, StepMotionAndTooFewFrames) {
+  // A textured image shifted right by 4 px per frame.
+  const fs::path dir = TempDir("frames");
+  cv::Mat3b texture(120, 400);
+  cv::randu(texture, 0, 255);
+  cv::Mat3b smooth;
+  cv::GaussianBlur(texture, smooth, cv::Size(5, 5), 1.5);
+  for (int i = 0; i < 10; ++i)
+    cv::imwrite((dir / cv::format("f%02d.png", i)).string(), smooth(cv::Rect(100 - 4 * i, 0, 160, 120)));
+  EXPECT_NEAR(MedianFlowDisplacement(cv::imread((dir / "f00.png").string()), cv::imread((dir / "f01.png").string())),
+              4, 0.5);
+  FrameSelectionOptions o;
+  o.step = 3;
+  EXPECT_EQ(SelectFrames(dir, o, dir / "step").size(), 4u);  // 0 3 6 9
+  o.method = "motion";
+  o.motion_fraction = 0.06;  // 9.6 px: every 3rd frame (12 px; 8 px is too little)
+  const auto kept = SelectFrames(dir, o, dir / "motion");
+  EXPECT_EQ(kept, (std::vector<std::string>{"f00.png", "f03.png", "f06.png", "f09.png"}));
+  o.motion_fraction = 0.5;  // never enough motion
+  EXPECT_NE(Message([&] { SelectFrames(dir, o, dir / "none"); }).find("too little motion"), std::string::npos);
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace orchard

@@ -1,0 +1,123 @@
+#include "orchard/sfm/ground_plane.h"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include <Eigen/Eigenvalues>
+
+#include "orchard/core/error.h"
+
+namespace orchard {
+namespace {
+
+double Median(std::vector<double> v) {
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+// Least-squares plane through points (smallest principal axis), normal
+// oriented along `up`.
+Plane FitPlaneLeastSquares(const std::vector<Eigen::Vector3d>& pts, const Eigen::Vector3d& up) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const auto& p : pts) mean += p;
+  mean /= static_cast<double>(pts.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (const auto& p : pts) cov += (p - mean) * (p - mean).transpose();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+  Plane plane;
+  plane.normal = eig.eigenvectors().col(0).normalized();
+  if (plane.normal.dot(up) < 0) plane.normal = -plane.normal;
+  plane.d = -plane.normal.dot(mean);
+  return plane;
+}
+
+}  // namespace
+
+void GroundPlaneOptions::Check() const {
+  ORCHARD_CHECK_OPTION(iterations > 0, "ground plane iterations must be positive, got ", iterations);
+  ORCHARD_CHECK_OPTION(inlier_fraction > 0 && inlier_fraction < 1, "ground inlier fraction must be in (0, 1), got ",
+                       inlier_fraction);
+  ORCHARD_CHECK_OPTION(max_tilt_deg > 0 && max_tilt_deg < 90, "ground max tilt must be in (0, 90) degrees, got ",
+                       max_tilt_deg);
+  ORCHARD_CHECK_OPTION(min_inliers >= 3, "ground min inliers must be at least 3, got ", min_inliers);
+}
+
+Plane FitGroundPlane(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& camera_centres,
+                     const Eigen::Vector3d& up_in, const GroundPlaneOptions& options, int* num_inliers) {
+  options.Check();
+  if (camera_centres.empty()) Fail("ground plane: no cameras");
+  if (static_cast<int>(points.size()) < options.min_inliers)
+    Fail("ground plane: only ", points.size(), " 3D points, need at least ", options.min_inliers,
+         " (too little texture on the ground?)");
+  const Eigen::Vector3d up = up_in.normalized();
+  std::vector<double> ranges;
+  for (size_t i = 0; i < points.size(); i += std::max<size_t>(1, points.size() / 500))
+    ranges.push_back((points[i] - camera_centres[camera_centres.size() / 2]).norm());
+  const double tol = options.inlier_fraction * Median(ranges);
+  const double cos_tilt = std::cos(options.max_tilt_deg * M_PI / 180);
+  std::mt19937_64 rng(options.seed);
+  std::uniform_int_distribution<size_t> pick(0, points.size() - 1);
+  auto admissible = [&](const Plane& p) {
+    if (p.normal.dot(up) < cos_tilt) return false;
+    for (const auto& c : camera_centres)
+      if (p.SignedDistance(c) <= 0) return false;
+    return true;
+  };
+  auto count_inliers = [&](const Plane& p) {
+    int n = 0;
+    for (const auto& x : points) n += std::abs(p.SignedDistance(x)) < tol;
+    return n;
+  };
+  Plane best;
+  int best_count = -1;
+  for (int it = 0; it < options.iterations; ++it) {
+    const Eigen::Vector3d& a = points[pick(rng)];
+    const Eigen::Vector3d& b = points[pick(rng)];
+    const Eigen::Vector3d& c = points[pick(rng)];
+    Eigen::Vector3d n = (b - a).cross(c - a);
+    if (n.norm() < 1e-12) continue;
+    Plane p;
+    p.normal = n.normalized();
+    if (p.normal.dot(up) < 0) p.normal = -p.normal;
+    p.d = -p.normal.dot(a);
+    if (!admissible(p)) continue;
+    const int count = count_inliers(p);
+    if (count > best_count) best_count = count, best = p;
+  }
+  if (best_count < options.min_inliers)
+    Fail("ground plane: no roughly horizontal plane below the cameras has ", options.min_inliers,
+         " supporting points (best: ", std::max(best_count, 0), " of ", points.size(), ")");
+  // Refine on the inliers (twice, as the inlier set settles).
+  for (int round = 0; round < 2; ++round) {
+    std::vector<Eigen::Vector3d> inliers;
+    for (const auto& x : points)
+      if (std::abs(best.SignedDistance(x)) < tol) inliers.push_back(x);
+    if (inliers.size() < 3) break;
+    const Plane refined = FitPlaneLeastSquares(inliers, up);
+    if (!admissible(refined)) break;
+    best = refined;
+    best_count = static_cast<int>(inliers.size());
+  }
+  if (num_inliers) *num_inliers = best_count;
+  return best;
+}
+
+Eigen::Vector3d MeanCameraUp(const std::vector<CameraView>& views) {
+  Eigen::Vector3d up = Eigen::Vector3d::Zero();
+  for (const auto& v : views) up -= v.Down();
+  if (up.norm() < 1e-12) Fail("cameras have no common up direction");
+  return up.normalized();
+}
+
+double ScaleFromCameraHeight(const Plane& ground, const std::vector<CameraView>& views, double camera_height) {
+  if (!(camera_height > 0)) Fail("camera height must be positive, got ", camera_height);
+  if (views.empty()) Fail("scale from camera height: no cameras");
+  std::vector<double> heights;
+  for (const auto& v : views) heights.push_back(ground.SignedDistance(v.Center()));
+  const double h = Median(heights);
+  if (!(h > 0)) Fail("the cameras are not above the ground plane (median height ", h, ")");
+  return camera_height / h;
+}
+
+}  // namespace orchard

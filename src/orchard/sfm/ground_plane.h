@@ -1,0 +1,51 @@
+// The ground plane of a row reconstruction and the metric scale it gives:
+// a robust (RANSAC) plane fit to 3D points, restricted to planes roughly
+// perpendicular to the cameras' up direction and below all cameras, so the
+// fruit wall or the camera path never wins; the scale then follows from the
+// cameras' known height above the ground.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "orchard/sfm/camera_view.h"
+
+namespace orchard {
+
+// n . X + d = 0 with |n| = 1, n pointing up (towards the cameras).
+struct Plane {
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+  double d = 0;
+  double SignedDistance(const Eigen::Vector3d& X) const { return normal.dot(X) + d; }
+};
+
+struct GroundPlaneOptions {
+  // RANSAC hypotheses (three points each).
+  int iterations = 2000;
+  // Inlier distance as a fraction of the median camera-to-point distance (the
+  // reconstruction has no scale yet): 2% is ~5 cm at a 2.5 m working distance.
+  double inlier_fraction = 0.02;
+  // Largest angle between the plane normal and the cameras' mean up vector.
+  double max_tilt_deg = 30;
+  // Fewest inliers for a ground plane.
+  int min_inliers = 15;
+  std::uint64_t seed = 1;
+  void Check() const;
+};
+
+// The ground plane of `points`; `up` is the cameras' mean up direction and
+// `camera_centres` must all lie above the plane. Throws orchard::Error when
+// no plane has enough inliers (too few points on the ground).
+Plane FitGroundPlane(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& camera_centres,
+                     const Eigen::Vector3d& up, const GroundPlaneOptions& options, int* num_inliers = nullptr);
+
+// Mean up direction of the cameras (minus their image y axes), unit length.
+Eigen::Vector3d MeanCameraUp(const std::vector<CameraView>& views);
+
+// The factor that makes the median camera height above `ground` equal
+// `camera_height` (metres). Throws when the cameras are not above the plane.
+double ScaleFromCameraHeight(const Plane& ground, const std::vector<CameraView>& views, double camera_height);
+
+}  // namespace orchard

@@ -1,0 +1,74 @@
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "orchard/core/error.h"
+#include "orchard/sfm/ground_plane.h"
+
+namespace orchard {
+namespace {
+
+CameraView CameraAt(const Eigen::Vector3d& c) {
+  CameraView v;
+  v.width = 640, v.height = 480, v.fx = v.fy = 500, v.cx = 320, v.cy = 240;
+  v.R << 1, 0, 0, 0, 0, -1, 0, 1, 0;  // looking along +y, image y down = world -z
+  v.t = -v.R * c;
+  return v;
+}
+
+TEST(GroundPlane, RobustToFruitWallAndOutliers) {
+  // A ground tilted 3 degrees about x, 60 points on it (+-1 cm noise), a vertical
+  // "fruit wall" of 120 points (more than the ground!) and 40 random outliers.
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const double tilt = 3 * M_PI / 180;
+  const Eigen::Vector3d n(0, -std::sin(tilt), std::cos(tilt));
+  std::vector<Eigen::Vector3d> pts;
+  for (int i = 0; i < 60; ++i) {
+    Eigen::Vector3d p(4 * u(rng), 3 * u(rng), 0);
+    p.z() = -(n.x() * p.x() + n.y() * p.y()) / n.z() + 0.01 * u(rng);
+    pts.push_back(p);
+  }
+  for (int i = 0; i < 120; ++i) pts.push_back({4 * u(rng), 0.01 * u(rng), 1.5 + u(rng)});
+  for (int i = 0; i < 40; ++i) pts.push_back({4 * u(rng), 3 * u(rng), 1.5 + 1.5 * u(rng)});
+  std::vector<CameraView> views;
+  std::vector<Eigen::Vector3d> centres;
+  for (int i = 0; i < 5; ++i) {
+    views.push_back(CameraAt({i * 0.5, -2.5, 1.5}));
+    centres.push_back(views.back().Center());
+  }
+  const Eigen::Vector3d up = MeanCameraUp(views);
+  EXPECT_NEAR(up.z(), 1, 1e-12);
+  int inliers = 0;
+  const Plane g = FitGroundPlane(pts, centres, up, GroundPlaneOptions{}, &inliers);
+  EXPECT_GT(g.normal.dot(n), std::cos(0.5 * M_PI / 180));
+  EXPECT_NEAR(g.SignedDistance(Eigen::Vector3d::Zero()), 0, 0.01);
+  EXPECT_GE(inliers, 58);
+  EXPECT_LE(inliers, 75);
+  // Scale: cameras at 1.5 m in a model scaled by 1/3 -> factor 3 restores 1.5 m.
+  Plane scaled = g;
+  scaled.d /= 3;
+  std::vector<CameraView> small = views;
+  ScaleViews(1.0 / 3, &small);
+  const double s = ScaleFromCameraHeight(scaled, small, 1.5);
+  const double expected = 1.5 / g.SignedDistance(views[2].Center()) * 3;
+  EXPECT_NEAR(s, expected, 0.02 * expected);
+  EXPECT_NEAR(g.SignedDistance(views[2].Center()), 1.5 + 0.0 * s, 0.15);
+}
+
+TEST(GroundPlane, FailsClearlyWithoutGroundPoints) {
+  std::vector<CameraView> views = {CameraAt({0, -2.5, 1.5}), CameraAt({1, -2.5, 1.5})};
+  std::vector<Eigen::Vector3d> centres = {views[0].Center(), views[1].Center()};
+  // Only a vertical wall: no horizontal plane.
+  std::vector<Eigen::Vector3d> wall;
+  for (int i = 0; i < 50; ++i) wall.push_back({0.1 * i, 0, 0.5 + 0.03 * (i % 7)});
+  EXPECT_THROW(FitGroundPlane(wall, centres, MeanCameraUp(views), GroundPlaneOptions{}), Error);
+  EXPECT_THROW(FitGroundPlane({}, centres, MeanCameraUp(views), GroundPlaneOptions{}), Error);
+  Plane above;
+  above.d = -3;  // z = 3: the cameras are below it
+  EXPECT_THROW(ScaleFromCameraHeight(above, views, 1.5), Error);
+  EXPECT_THROW(ScaleFromCameraHeight(Plane{}, views, 0), Error);
+}
+
+}  // namespace
+}  // namespace orchard
