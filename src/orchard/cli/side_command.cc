@@ -6,8 +6,8 @@
 
 #include "orchard/cli/commands.h"
 #include "orchard/core/error.h"
-#include "orchard/count/gmm_counter.h"
-#include "orchard/detect/gmm/gmm_detector.h"
+#include "orchard/count/counter_factory.h"
+#include "orchard/detect/detector_factory.h"
 #include "orchard/fruitmap/side.h"
 
 namespace orchard {
@@ -18,8 +18,7 @@ void AddSideCommand(CLI::App& app) {
   struct Args {
     std::string in, out, poses, masks, ground, detector = "gmm", counter = "blob", model, counter_model;
     SideOptions options;
-    GmmDetectorOptions gmm;
-    GmmCounterOptions gmm_counter;
+    int threads = 0;
   };
   auto a = std::make_shared<Args>();
   SideOptions& o = a->options;
@@ -28,10 +27,12 @@ void AddSideCommand(CLI::App& app) {
   cmd->add_option("--poses", a->poses, "COLMAP text model of the frames (default: run COLMAP)");
   cmd->add_option("--ground-plane", a->ground,
                   "Ground plane nx,ny,nz,d or a json file with ground_plane {normal, d} (default: fit to the sparse points)");
-  cmd->add_option("--detector", a->detector, "Fruit: gmm, or masks (instance masks from --masks)")->capture_default_str();
+  cmd->add_option("--detector", a->detector, "Fruit: gmm, unet, or masks (instance masks from --masks)")
+      ->capture_default_str();
   cmd->add_option("--masks", a->masks, "Instance masks (16-bit, one id per apple) named like the frames");
-  cmd->add_option("--model", a->model, "Detector model (gmm: colour model json)")->capture_default_str();
-  cmd->add_option("--counter", a->counter, "Apples per blob: blob (one each) or gmm")->capture_default_str();
+  cmd->add_option("--model", a->model, "Detector model (default: the shipped model of the detector)");
+  cmd->add_option("--counter", a->counter, "Apples per blob: blob (one each), cnn or gmm")->capture_default_str();
+  cmd->add_option("--counter-model", a->counter_model, "Counter model (default: the shipped one)");
   cmd->add_option("--frame-selection", o.frames.method, "step or motion")->capture_default_str();
   cmd->add_option("--step", o.frames.step, "Keep every n-th frame (step)")->capture_default_str();
   cmd->add_option("--motion", o.frames.motion_fraction, "Keep a frame after this median flow (fraction of width)")
@@ -44,14 +45,32 @@ void AddSideCommand(CLI::App& app) {
   cmd->add_flag("--rescale-poses", o.rescale_given_poses, "Scale given poses by the camera height too");
   cmd->add_option("--link-distance", o.clusters.link_distance, "Fruit points closer than this (m) form a cluster")
       ->capture_default_str();
+  cmd->add_option("--min-support", o.clusters.points.min_support, "A fruit point must land on fruit in this many frames")
+      ->capture_default_str();
+  cmd->add_option("--support-ratio", o.clusters.points.min_support_ratio,
+                  "... and in this fraction of the frames it falls into")
+      ->capture_default_str();
+  cmd->add_option("--support-window", o.clusters.points.support_window, "Frames either side checked for support")
+      ->capture_default_str();
+  cmd->add_option("--centre-fraction", o.clusters.points.centre_fraction,
+                  "Support only near blob centres (fraction of the blob radius, 0 = anywhere on the blob)")
+      ->capture_default_str();
+  cmd->add_option("--partner-min", o.clusters.points.min_partner_offset, "Nearest partner frame for a first triangulation")
+      ->capture_default_str();
+  cmd->add_option("--partner-max", o.clusters.points.max_partner_offset, "Farthest partner frame")
+      ->capture_default_str();
+  cmd->add_option("--min-cluster-points", o.clusters.min_points, "Fewest fruit points of a cluster")
+      ->capture_default_str();
   cmd->add_option("--fallen-height", o.clusters.fallen_height, "Clusters lower than this (m) are fallen apples")
       ->capture_default_str();
   cmd->add_option("--row-distance", o.clusters.row_distance, "Camera path to row centre (m), 0 = estimate")
       ->capture_default_str();
   cmd->add_option("--next-row-margin", o.clusters.next_row_margin, "Beyond row distance + this (m): next row")
       ->capture_default_str();
+  cmd->add_option("--near-margin", o.clusters.near_margin, "Nearer than row distance - this (m): removed")
+      ->capture_default_str();
   cmd->add_option("--draw-every", o.draw_every, "Annotate every n-th frame (0 = none)")->capture_default_str();
-  cmd->add_option("--threads", a->gmm.num_threads, "Detector threads")->capture_default_str();
+  cmd->add_option("--threads", a->threads, "Detector and counter threads (0 = all cores)")->capture_default_str();
   cmd->callback([a]() {
     SideInputs in;
     in.input = a->in;
@@ -59,27 +78,29 @@ void AddSideCommand(CLI::App& app) {
     in.poses = a->poses;
     if (!a->ground.empty()) in.ground = ParseGroundPlane(a->ground);
     std::unique_ptr<Detector> detector;
-    std::shared_ptr<const ColourModel> colour;
     if (a->detector == "masks") {
       if (a->masks.empty()) Fail("--detector masks needs --masks DIR");
       in.masks = a->masks;
-    } else if (a->detector == "gmm") {
-      if (a->model.empty()) Fail("--detector gmm needs --model (a colour model, e.g. models/gmm_red.json)");
-      colour = std::make_shared<ColourModel>(ReadColourModel(a->model));
-      detector = std::make_unique<GmmDetector>(*colour, a->gmm);
-      in.detector = detector.get();
+      in.detector_name = "masks";
     } else {
-      Fail("detector '", a->detector, "' is not available (available: gmm, masks)");
+      DetectorChoice choice;
+      choice.method = a->detector;
+      choice.model = a->model;
+      choice.threads = a->threads;
+      detector = MakeDetector(choice);
+      in.detector = detector.get();
+      in.detector_name = a->detector + ":" + (a->model.empty() ? DefaultDetectorModel(a->detector).string() : a->model);
     }
-    in.detector_name = a->detector + (a->model.empty() ? "" : ":" + a->model);
     std::unique_ptr<Counter> counter;
-    if (a->counter == "gmm") {
-      counter = std::make_unique<GmmCounter>(a->gmm_counter, colour);
+    if (a->counter != "blob") {
+      CounterChoice choice;
+      choice.method = a->counter;
+      choice.model = a->counter_model;
+      choice.threads = a->threads;
+      counter = MakeCounter(choice);
       in.counter = counter.get();
-    } else if (a->counter != "blob") {
-      Fail("counter '", a->counter, "' is not available (available: blob, gmm)");
     }
-    in.counter_name = a->counter;
+    in.counter_name = a->counter + (a->counter_model.empty() ? "" : ":" + a->counter_model);
     const SideSummary s = RunSide(in, a->options);
     std::printf("count %d (single-frame sum %d), %d clusters kept, %d removed, %d frames -> %s\n", s.count,
                 s.single_frame_sum, s.clusters_kept, s.clusters_removed, s.frames_used, a->out.c_str());

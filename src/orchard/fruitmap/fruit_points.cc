@@ -33,10 +33,19 @@ Support CheckSupport(const std::vector<CameraView>& views, const std::vector<Fru
   for (int f = std::max(0, centre - o.support_window); f <= std::min(n - 1, centre + o.support_window); ++f) {
     const double z = views[f].Depth(X);
     if (z < o.min_depth || z > o.max_depth) continue;
-    const int id = BlobAt(views[f], frames[f], X);
-    if (id < 0) continue;
+    Eigen::Vector2d p;
+    if (!views[f].Project(X, &p)) continue;
     ++s.in_image;
-    if (id > 0) ++s.hits, s.blobs.emplace_back(f, id);
+    const int id = frames[f].labels(static_cast<int>(p.y()), static_cast<int>(p.x()));
+    if (id <= 0) continue;
+    // Near the blob's centre: a wrong pairing lands on fruit by chance, but
+    // rarely near the centres of the blobs it lands on.
+    if (o.centre_fraction > 0) {
+      const Blob& b = *frames[f].FindBlob(id);
+      const double radius = std::sqrt(b.pixels / M_PI);
+      if ((p - Centre(b)).norm() > std::max(o.centre_fraction * radius, 2.0)) continue;
+    }
+    ++s.hits, s.blobs.emplace_back(f, id);
   }
   return s;
 }
@@ -69,6 +78,7 @@ void FruitPointOptions::Check() const {
   ORCHARD_CHECK_OPTION(min_support >= 2, "min support must be at least 2, got ", min_support);
   ORCHARD_CHECK_OPTION(min_support_ratio > 0 && min_support_ratio <= 1, "min support ratio must be in (0, 1], got ",
                        min_support_ratio);
+  ORCHARD_CHECK_OPTION(centre_fraction >= 0, "centre fraction must be >= 0, got ", centre_fraction);
   ORCHARD_CHECK_OPTION(min_depth > 0 && max_depth > min_depth, "depth range must satisfy 0 < min < max, got ",
                        min_depth, "..", max_depth);
 }

@@ -26,9 +26,10 @@ struct FruitFrame {
 
 struct FruitPointOptions {
   // Partner frames for the first triangulation: this many frames ahead (a
-  // longer baseline gives better depth, a shorter one more overlap).
-  int min_partner_offset = 2;
-  int max_partner_offset = 4;
+  // longer baseline gives better depth, a shorter one catches apples seen in
+  // few frames; 1..6 counted best on the development row, docs/side.md).
+  int min_partner_offset = 1;
+  int max_partner_offset = 6;
   // Consistency check over the frames within this many of the blob's frame.
   int support_window = 6;
   // Largest distance (pixels) of a blob centre from its match's epipolar line
@@ -37,8 +38,13 @@ struct FruitPointOptions {
   double max_error_fraction = 0.01;
   // A point is kept when it lands on fruit in at least this many frames and
   // in at least this fraction of the frames whose image it falls into.
-  int min_support = 4;
+  int min_support = 3;
   double min_support_ratio = 0.6;
+  // A frame supports a point only when the point projects within this
+  // fraction of the blob's equivalent radius (sqrt(pixels / pi)) of the
+  // blob's centre (0 = anywhere on the blob): wrong pairings land on fruit by
+  // chance but rarely near blob centres.
+  double centre_fraction = 0.7;
   // Depth range in front of the cameras (scene units: metres once scaled).
   double min_depth = 0.3;
   double max_depth = 15;

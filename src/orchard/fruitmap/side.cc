@@ -22,11 +22,6 @@ namespace {
 
 using Json = nlohmann::json;
 
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
 
 // Unit vectors along the camera path and across it (towards the row), both
 // in the ground plane.
@@ -49,6 +44,22 @@ void PathAxes(const std::vector<CameraView>& views, const Plane& ground, Eigen::
   *along = u, *across = f.normalized();
 }
 
+// The filmed row's fruit: the 25 cm band of cluster distances holding the
+// most fruit pixels (each cluster weighted by the pixels of its largest view).
+// Counting clusters instead would pick the next row when the filmed stretch
+// is short and the next row fills the frame; its apples are small in the
+// image, the filmed row's large.
+double DensestFruitDistance(const std::vector<std::pair<double, double>>& distance_pixels) {
+  constexpr double kBand = 0.25;
+  std::map<int, double> bands;
+  for (const auto& [d, pixels] : distance_pixels)
+    if (d > 0) bands[static_cast<int>(d / kBand)] += pixels;
+  if (bands.empty()) return 0;
+  const auto best = std::max_element(bands.begin(), bands.end(),
+                                     [](const auto& a, const auto& b) { return a.second < b.second; });
+  return (best->first + 0.5) * kBand;
+}
+
 }  // namespace
 
 void ClusterOptions::Check() const {
@@ -58,6 +69,7 @@ void ClusterOptions::Check() const {
   ORCHARD_CHECK_OPTION(best_views >= 1, "best views must be at least 1, got ", best_views);
   ORCHARD_CHECK_OPTION(row_distance >= 0, "row distance must be >= 0, got ", row_distance);
   ORCHARD_CHECK_OPTION(next_row_margin > 0, "next-row margin must be positive, got ", next_row_margin);
+  ORCHARD_CHECK_OPTION(near_margin > 0, "near margin must be positive, got ", near_margin);
 }
 
 ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std::vector<FruitFrame>& frames,
@@ -114,7 +126,7 @@ ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std
   }
   Eigen::Vector3d mean, along, across;
   PathAxes(views, ground, &mean, &along, &across);
-  std::vector<double> tree_distances;
+  std::vector<std::pair<double, double>> tree_distances;  // distance, pixels
   for (auto& c : r.clusters) {
     c.count = MedianOfBestViews(c.views, o.best_views, &c.count_frames);
     c.height = ground.SignedDistance(c.centre);
@@ -126,12 +138,18 @@ ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std
     else if (c.height < o.fallen_height)
       c.status = "fallen";
     else
-      tree_distances.push_back(c.distance);
+      tree_distances.emplace_back(
+          c.distance, std::max_element(c.views.begin(), c.views.end(), [](const auto& a, const auto& b) {
+                        return a.pixels < b.pixels;
+                      })->pixels);
   }
-  r.row_distance = o.row_distance > 0 ? o.row_distance : Median(tree_distances);
+  r.row_distance = o.row_distance > 0 ? o.row_distance : DensestFruitDistance(tree_distances);
   r.depth_cutoff = r.row_distance + o.next_row_margin;
   for (auto& c : r.clusters) {
-    if (c.status == "kept" && (c.distance > r.depth_cutoff || c.distance < 0.3)) c.status = "next_row";
+    if (c.status == "kept" && c.distance > r.depth_cutoff) c.status = "next_row";
+    // Nothing grows between the camera and the row: clusters there are
+    // chance pairings of different apples' blobs.
+    if (c.status == "kept" && c.distance < r.row_distance - o.near_margin) c.status = "too_near";
     if (c.status == "kept") r.count += c.count;
   }
   return r;
