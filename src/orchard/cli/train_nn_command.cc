@@ -20,6 +20,9 @@ void AddTrainerOptions(CLI::App* cmd, nn::TrainerOptions* trainer, std::string* 
   cmd->add_option("--patience", trainer->patience, "Stop after this many epochs without a better validation metric")
       ->capture_default_str();
   cmd->add_option("--batch", trainer->batch_size, "Batch size")->capture_default_str();
+  cmd->add_option("--samples-per-epoch", trainer->samples_per_epoch,
+                  "Training samples (patches, tiles) drawn per epoch, reshuffled each epoch (0 = all)")
+      ->capture_default_str();
   cmd->add_option("--seed", trainer->seed, "Seed of initialisation, shuffling and augmentation")->capture_default_str();
   cmd->add_option("--threads", trainer->threads, "LibTorch threads (0 = all cores)")->capture_default_str();
   cmd->add_option("--state", *state_dir, "Folder for resumable training state: rerun with it to resume");
@@ -110,8 +113,6 @@ void AddTrainNetworkCommands(CLI::App& app) {
   unet->add_option("--stride", u->options.stride, "Training tiles are cut every this many pixels (the study: 50)")
       ->capture_default_str();
   unet->add_option("--lr", u->options.learning_rate, "AdaDelta learning rate")->capture_default_str();
-  unet->add_option("--tiles-per-epoch", u->options.trainer.samples_per_epoch, "Training tiles drawn per epoch (0 = all)")
-      ->capture_default_str();
   unet->add_option("--val-fraction", u->options.validation_fraction, "Fraction of training photos for validation")
       ->capture_default_str();
   AddTrainerOptions(unet, &u->options.trainer, &u->state);
