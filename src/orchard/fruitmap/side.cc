@@ -417,7 +417,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
     for (const auto& [id, p] : model.points3D) pts.push_back(p.xyz);
     for (const auto& v : views) centres.push_back(v.Center());
     if (static_cast<int>(pts.size()) < o.ground.min_inliers)
-      Fail("the pose model has ", pts.size(), " 3D points, too few to fit the ground plane: give the ground plane");
+      Fail("the pose model has ", pts.size(), " 3D points, too few to fit the ground plane: give the ground plane (orchard side --ground-plane)");
     int inliers = 0;
     ground = FitGroundPlane(pts, centres, MeanCameraUp(views), o.ground, &inliers);
     ground_source = "fitted to " + std::to_string(inliers) + " of " + std::to_string(pts.size()) + " sparse points";
