@@ -14,13 +14,6 @@ Eigen::Vector2d Centre(const Blob& b) {
   return {b.centroid.x + 0.5, b.centroid.y + 0.5};
 }
 
-// Blob under the projection of X into frame f (0 = none or outside).
-int BlobAt(const CameraView& view, const FruitFrame& frame, const Eigen::Vector3d& X) {
-  Eigen::Vector2d p;
-  if (!view.Project(X, &p)) return -1;
-  return frame.labels(static_cast<int>(p.y()), static_cast<int>(p.x()));
-}
-
 struct Support {
   int in_image = 0, hits = 0;
   std::vector<std::pair<int, int>> blobs;  // (frame, blob id) hit
@@ -36,15 +29,22 @@ Support CheckSupport(const std::vector<CameraView>& views, const std::vector<Fru
     Eigen::Vector2d p;
     if (!views[f].Project(X, &p)) continue;
     ++s.in_image;
-    const int id = frames[f].labels(static_cast<int>(p.y()), static_cast<int>(p.x()));
-    if (id <= 0) continue;
-    // Near the blob's centre: a wrong pairing lands on fruit by chance, but
-    // rarely near the centres of the blobs it lands on.
+    int id = 0;
     if (o.centre_fraction > 0) {
-      const Blob& b = *frames[f].FindBlob(id);
-      const double radius = std::sqrt(b.pixels / M_PI);
-      if ((p - Centre(b)).norm() > std::max(o.centre_fraction * radius, 2.0)) continue;
+      // Near a blob's centre: a wrong pairing lands on fruit by chance, but
+      // rarely near the centres of the blobs it lands on. By distance, not by
+      // the label under the point: a partly hidden apple's centre may fall
+      // between its visible pieces.
+      double nearest = 1e300;
+      for (const Blob& b : frames[f].blobs) {
+        if (p.x() < b.box.x1 - 2 || p.x() > b.box.x2 + 2 || p.y() < b.box.y1 - 2 || p.y() > b.box.y2 + 2) continue;
+        const double d = (p - Centre(b)).norm();
+        if (d <= std::max(o.centre_fraction * std::sqrt(b.pixels / M_PI), 2.0) && d < nearest) nearest = d, id = b.id;
+      }
+    } else {
+      id = frames[f].labels(static_cast<int>(p.y()), static_cast<int>(p.x()));
     }
+    if (id <= 0) continue;
     ++s.hits, s.blobs.emplace_back(f, id);
   }
   return s;
@@ -127,7 +127,9 @@ std::vector<FruitPoint> TriangulateFruitPoints(const std::vector<CameraView>& vi
           }
           s = CheckSupport(views, frames, X, i, o);
           // The blob itself must still be hit.
-          if (!Accept(s, o) || BlobAt(views[i], frames[i], X) != blob.id) continue;
+          if (!Accept(s, o) ||
+              std::find(s.blobs.begin(), s.blobs.end(), std::make_pair(i, blob.id)) == s.blobs.end())
+            continue;
           double error = 0;
           for (const auto& [f, id] : s.blobs) error += ReprojectionError(views[f], X, Centre(*frames[f].FindBlob(id)));
           error /= s.hits;

@@ -109,6 +109,9 @@ std::vector<FruitFrame> RenderBalls(const std::vector<CameraView>& views, const 
       blob.id = id;
       blob.pixels = cv::countNonZero(disc);
       blob.centroid = {std::floor(p.x()), std::floor(p.y())};
+      const cv::Rect box = cv::boundingRect(disc);
+      blob.box = Box{static_cast<double>(box.x), static_cast<double>(box.y), static_cast<double>(box.x + box.width),
+                     static_cast<double>(box.y + box.height)};
       f.blobs.push_back(blob);
       f.counts.push_back(1);
     }

@@ -30,7 +30,7 @@ struct ClusterOptions {
   // an apple's radius, so the points of one apple join while apples a hand
   // apart stay separate (touching apples form one cluster; the count from
   // its views says how many).
-  double link_distance = 0.06;
+  double link_distance = 0.07;
   // Fewest fruit points for a cluster. Every point has passed the support
   // check already; 2 drops chance pairings but also heavily occluded apples
   // (on the development row 1 gave the count closest to the truth).
