@@ -16,6 +16,7 @@
 #include "orchard/core/error.h"
 #include "orchard/core/file_io.h"
 #include "orchard/core/frame_source.h"
+#include "orchard/sfm/colmap_binary.h"
 
 namespace orchard {
 namespace {
@@ -359,7 +360,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   int num_frames = 0;
   bool rescale = o.rescale_given_poses;
   if (!in.poses.empty()) {
-    model = ReadColmapTextModel(in.poses);
+    model = ReadColmapModel(in.poses);
     if (fs::is_directory(in.input)) {
       image_dir = in.input;
     } else {
