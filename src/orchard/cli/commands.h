@@ -10,6 +10,7 @@ class App;
 namespace orchard {
 
 // --- registered commands (one line each; keep in data-flow order) ---
+void AddDemoCommand(CLI::App& app);     // orchard demo: the end-to-end slice on a synthetic row
 void AddConvertCommand(CLI::App& app);  // orchard convert: dataset formats
 void AddSynthCommand(CLI::App& app);    // orchard synth: synthetic rows with ground truth
 void AddEvalCommand(CLI::App& app);     // orchard eval: detection/segmentation/count/yield metrics

@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", ORCHARD_VERSION);
 
   // --- subcommands (one line each) ---
+  orchard::AddDemoCommand(app);
   orchard::AddConvertCommand(app);
   orchard::AddSynthCommand(app);
   orchard::AddEvalCommand(app);
