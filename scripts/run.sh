@@ -27,7 +27,7 @@ cmake --build build -j "$jobs"
 
 case "$what" in
   build) ;;
-  demo) ./build/orchard demo ;;
+  demo) ./build/orchard demo --out build/demo ;;
   test) ctest --test-dir build --output-on-failure -j "$jobs" ;;
   *) echo "usage: bash scripts/run.sh [demo|test|build]" >&2; exit 2 ;;
 esac
