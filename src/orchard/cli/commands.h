@@ -20,5 +20,6 @@ void AddCountCommand(CLI::App& app);    // orchard count: apples per blob
 void AddSideCommand(CLI::App& app);     // orchard side: one side of a row in 3D, tracked count
 void AddTrainNetworkCommands(CLI::App& app);  // orchard train counter|unet (needs AddTrainCommand first)
 void AddPatchesCommand(CLI::App& app);        // orchard patches: counting patches from box annotations
+void AddSplitCommand(CLI::App& app);          // orchard split: photo-wise train/test lists and image folders
 
 }  // namespace orchard

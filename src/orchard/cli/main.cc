@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
   orchard::AddSideCommand(app);
   orchard::AddTrainNetworkCommands(app);  // after AddTrainCommand: adds to `train`
   orchard::AddPatchesCommand(app);
+  orchard::AddSplitCommand(app);
 
   try {
     app.parse(argc, argv);
