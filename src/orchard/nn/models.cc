@@ -16,7 +16,12 @@ tnn::Sequential ConvBnRelu(int in, int out, int kernel, int stride, bool batch_n
   return seq;
 }
 
-// Residual blocks. The shortcut projects with a 1x1 convolution when the shape changes.
+// The residual shortcut when the shape changes: 1x1 convolution + batch norm.
+tnn::Sequential Projection(int in, int out, int stride) {
+  return tnn::Sequential(tnn::Conv2d(tnn::Conv2dOptions(in, out, 1).stride(stride).bias(false)), tnn::BatchNorm2d(out));
+}
+
+// Residual blocks.
 class BasicBlockImpl : public tnn::Module {
  public:
   BasicBlockImpl(int in, int out, int stride) {
@@ -24,11 +29,7 @@ class BasicBlockImpl : public tnn::Module {
     bn1_ = register_module("bn1", tnn::BatchNorm2d(out));
     conv2_ = register_module("conv2", tnn::Conv2d(tnn::Conv2dOptions(out, out, 3).padding(1).bias(false)));
     bn2_ = register_module("bn2", tnn::BatchNorm2d(out));
-    if (stride != 1 || in != out) {
-      shortcut_ = register_module(
-          "shortcut", tnn::Sequential(tnn::Conv2d(tnn::Conv2dOptions(in, out, 1).stride(stride).bias(false)),
-                                      tnn::BatchNorm2d(out)));
-    }
+    if (stride != 1 || in != out) shortcut_ = register_module("shortcut", Projection(in, out, stride));
   }
   torch::Tensor forward(torch::Tensor x) {
     torch::Tensor y = torch::relu(bn1_(conv1_(x)));
@@ -54,11 +55,7 @@ class BottleneckImpl : public tnn::Module {
     bn2_ = register_module("bn2", tnn::BatchNorm2d(width));
     conv3_ = register_module("conv3", tnn::Conv2d(tnn::Conv2dOptions(width, out, 1).bias(false)));
     bn3_ = register_module("bn3", tnn::BatchNorm2d(out));
-    if (stride != 1 || in != out) {
-      shortcut_ = register_module(
-          "shortcut", tnn::Sequential(tnn::Conv2d(tnn::Conv2dOptions(in, out, 1).stride(stride).bias(false)),
-                                      tnn::BatchNorm2d(out)));
-    }
+    if (stride != 1 || in != out) shortcut_ = register_module("shortcut", Projection(in, out, stride));
   }
   torch::Tensor forward(torch::Tensor x) {
     torch::Tensor y = torch::relu(bn1_(conv1_(x)));
