@@ -19,7 +19,7 @@ for set in applebbch81 applebbch76; do
   # U-Net and colour detector on the test photos, against the boxes.
   "$orchard" detect --method unet --model "$models/unet.pt" --in "$d/split/test/images" --out "$d/unet"
   "$orchard" detect --method gmm --model "$models/gmm_red.json" --in "$d/split/test/images" --out "$d/gmm"
-  "$orchard" eval detect --gt "$data/$set" --test-fraction 0.25 --split-seed 1 --subset test \
+  "$orchard" eval detect --gt "$d/split/test" \
     --pred unet="$d/unet/detections.csv" --pred gmm="$d/gmm/detections.csv" --out "$d/eval_detect"
 done
 # Segmentation against exact masks: a synthetic row no model was trained on.

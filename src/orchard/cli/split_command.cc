@@ -1,6 +1,6 @@
-// `orchard split`: the photo-wise train/test split of a dataset, as image
-// lists and folders of links, so any command that reads an image folder
-// (detect, side) can run on exactly the photos that training never saw.
+// `orchard split`: the photo-wise train/test split of a dataset, written as
+// two YOLO datasets and image lists, so any command (detect, eval, side) can
+// run on exactly the photos that training never saw.
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
@@ -14,7 +14,7 @@ namespace orchard {
 
 void AddSplitCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
-      "split", "Split a dataset by photo: OUT/{train,test}.txt and OUT/{train,test}/images/ (links to the images)");
+      "split", "Split a dataset by photo: OUT/{train,test}/ as YOLO datasets (images/, labels/) and OUT/{train,test}.txt");
   struct Args {
     std::string data, out;
     double test_fraction = 0.25;
@@ -32,17 +32,13 @@ void AddSplitCommand(CLI::App& app) {
     const fs::path out = a->out;
     for (const auto& [name, part] : {std::pair<std::string, const Dataset*>{"train", &split.train},
                                      std::pair<std::string, const Dataset*>{"test", &split.test}}) {
-      std::string list;
-      const fs::path dir = out / name / "images";
+      // Each part becomes a YOLO dataset (image copies + labels) that every
+      // command reads, `orchard eval detect --gt` included. A rerun replaces it.
       std::error_code ec;
-      fs::remove_all(dir, ec);  // links only: a rerun replaces the previous split
-      fs::create_directories(dir);
-      for (const AnnotatedImage& image : part->images) {
-        list += image.name + "\n";
-        if (image.path.empty()) continue;
-        fs::create_symlink(fs::absolute(image.path), dir / image.name, ec);
-        if (ec) Fail("cannot link ", image.path.string(), " into ", dir.string(), ": ", ec.message());
-      }
+      fs::remove_all(out / name, ec);
+      WriteYolo(*part, out / name);
+      std::string list;
+      for (const AnnotatedImage& image : part->images) list += image.name + "\n";
       WriteTextFileAtomic(out / (name + ".txt"), list);
     }
     spdlog::info("{} photos -> train {} photos ({} images), test {} photos ({} images) in {}",
