@@ -6,16 +6,12 @@
 
 #include "orchard/core/box.h"
 #include "orchard/core/error.h"
+#include "orchard/core/test_util.h"
 
 namespace orchard {
 namespace {
 
-fs::path TempDir(const std::string& name) {
-  fs::path dir = fs::temp_directory_path() / ("orchard_core_test_" + name);
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path TempDir(const std::string& name) { return test::FreshTempDir("core_test_" + name); }
 
 TEST(FileIo, AtomicWriteReplacesAndLeavesNoTemporary) {
   const fs::path dir = TempDir("atomic");

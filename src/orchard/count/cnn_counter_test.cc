@@ -11,16 +11,12 @@
 #include "orchard/core/file_io.h"
 #include "orchard/nn/checkpoint.h"
 #include "orchard/nn/counter_training.h"
+#include "orchard/core/test_util.h"
 
 namespace orchard {
 namespace {
 
-fs::path TempDir(const std::string& name) {
-  fs::path dir = fs::temp_directory_path() / ("orchard_cnn_counter_test_" + name);
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path TempDir(const std::string& name) { return test::FreshTempDir("cnn_counter_test_" + name); }
 
 // A leafy patch with `count` red discs (0..2 here, to keep the test quick).
 cv::Mat DiscPatch(int count, std::mt19937_64& rng) {

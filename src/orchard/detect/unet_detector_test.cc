@@ -11,16 +11,12 @@
 #include "orchard/nn/adadelta.h"
 #include "orchard/nn/checkpoint.h"
 #include "orchard/nn/segmentation_training.h"
+#include "orchard/core/test_util.h"
 
 namespace orchard {
 namespace {
 
-fs::path TempDir(const std::string& name) {
-  fs::path dir = fs::temp_directory_path() / ("orchard_unet_test_" + name);
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path TempDir(const std::string& name) { return test::FreshTempDir("unet_test_" + name); }
 
 // Red discs on a mottled green background, with their mask.
 nn::SegmentationSample DiscImage(std::mt19937_64& rng, const std::string& photo) {

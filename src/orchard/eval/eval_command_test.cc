@@ -15,6 +15,7 @@
 #include "orchard/data/dataset.h"
 #include "orchard/eval/count_metrics.h"
 #include "orchard/eval/detection_metrics.h"
+#include "orchard/core/test_util.h"
 
 namespace orchard {
 namespace {
@@ -36,12 +37,7 @@ int RunOrchard(const std::string& args, const fs::path& dir, std::string* err = 
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
-fs::path TempDir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("orchard_eval_cli_" + name);
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path TempDir(const std::string& name) { return test::FreshTempDir("eval_cli_" + name); }
 
 std::string Q(const fs::path& p) { return "'" + p.string() + "'"; }
 

@@ -8,6 +8,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "orchard/core/error.h"
+#include "orchard/core/test_util.h"
 
 namespace orchard {
 namespace {
@@ -67,8 +68,7 @@ TEST(SegmentationScores, NoAppleInGroundTruthOrPrediction) {
 }
 
 fs::path TempDir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("orchard_eval_seg_" + name);
-  fs::remove_all(dir);
+  const fs::path dir = test::FreshTempDir("eval_seg_" + name);
   fs::create_directories(dir / "gt" / "masks");
   fs::create_directories(dir / "pred");
   return dir;

@@ -8,16 +8,12 @@
 #include "orchard/nn/checkpoint.h"
 #include "orchard/nn/losses.h"
 #include "orchard/nn/trainer.h"
+#include "orchard/core/test_util.h"
 
 namespace orchard::nn {
 namespace {
 
-fs::path TempDir(const std::string& name) {
-  fs::path dir = fs::temp_directory_path() / ("orchard_nn_test_" + name);
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path TempDir(const std::string& name) { return test::FreshTempDir("nn_test_" + name); }
 
 TEST(Models, ResNetShapes) {
   for (int depth : {18, 34, 50}) {

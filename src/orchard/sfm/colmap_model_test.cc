@@ -4,16 +4,12 @@
 
 #include "orchard/core/error.h"
 #include "orchard/core/file_io.h"
+#include "orchard/core/test_util.h"
 
 namespace orchard {
 namespace {
 
-fs::path TempDir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("orchard_colmap_test_" + name);
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path TempDir(const std::string& name) { return test::FreshTempDir("colmap_test_" + name); }
 
 // A model as COLMAP writes it (values from a COLMAP 3.8 model_converter output layout).
 const char* kCameras =

@@ -6,6 +6,7 @@
 #include "orchard/core/file_io.h"
 #include "orchard/sfm/colmap_runner.h"
 #include "orchard/sfm/frame_selection.h"
+#include "orchard/core/test_util.h"
 
 namespace orchard {
 namespace {
@@ -19,12 +20,7 @@ std::string Message(const std::function<void()>& f) {
   return "";
 }
 
-fs::path TempDir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("orchard_sfm_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path TempDir(const std::string& name) { return test::FreshTempDir("sfm_" + name); }
 
 TEST(ColmapRunner, TooFewFramesAndMissingProgram) {
   const fs::path dir = TempDir("few");

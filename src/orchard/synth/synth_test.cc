@@ -13,6 +13,7 @@
 #include "orchard/core/error.h"
 #include "orchard/core/file_io.h"
 #include "orchard/sfm/colmap_model.h"
+#include "orchard/core/test_util.h"
 
 namespace orchard::synth {
 namespace {
@@ -64,8 +65,8 @@ std::vector<AppleRow> ReadApples(const fs::path& path) {
 class SynthOutput : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = fs::temp_directory_path() / "orchard_synth_test";
-    fs::remove_all(dir_);
+    // Per process: ctest runs the tests of this suite in parallel processes.
+    dir_ = test::FreshTempDir("synth_test");
     summary_ = RunSynth(SmallOptions(), dir_);
   }
   static fs::path dir_;
@@ -252,8 +253,8 @@ TEST(Synth, SameSeedGivesByteIdenticalOutput) {
   o.camera.sides = "front";
   o.camera.width = 120;
   o.camera.height_px = 68;
-  const fs::path a = fs::temp_directory_path() / "orchard_synth_det_a";
-  const fs::path b = fs::temp_directory_path() / "orchard_synth_det_b";
+  const fs::path a = test::FreshTempDir("synth_det_a");
+  const fs::path b = test::FreshTempDir("synth_det_b");
   fs::remove_all(a);
   fs::remove_all(b);
   RunSynth(o, a);
@@ -270,7 +271,7 @@ TEST(Synth, SameSeedGivesByteIdenticalOutput) {
   EXPECT_GT(files, 15);
   // A different seed gives a different row.
   o.seed = 8;
-  const fs::path c = fs::temp_directory_path() / "orchard_synth_det_c";
+  const fs::path c = test::FreshTempDir("synth_det_c");
   fs::remove_all(c);
   RunSynth(o, c);
   EXPECT_NE(ReadTextFile(a / "apples.csv"), ReadTextFile(c / "apples.csv"));
@@ -280,7 +281,7 @@ void ExpectOptionError(const std::function<void(SynthOptions&)>& change, const s
   SynthOptions o = SmallOptions();
   change(o);
   try {
-    RunSynth(o, fs::temp_directory_path() / "orchard_synth_bad");
+    RunSynth(o, test::FreshTempDir("synth_bad") / "out");
     ADD_FAILURE() << "no error for " << needle;
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
@@ -308,9 +309,10 @@ TEST(Synth, BadOptionsGiveClearErrors) {
 TEST(Synth, CommandLineReportsBadValues) {
   const char* bin = std::getenv("ORCHARD_BIN");
   if (!bin || !fs::exists(bin)) GTEST_SKIP() << "ORCHARD_BIN not built";
-  const fs::path log = fs::temp_directory_path() / "orchard_synth_cli.txt";
+  const fs::path cli_dir = test::FreshTempDir("synth_cli");
+  const fs::path log = cli_dir / "log.txt";
   const std::string cmd = std::string(bin) + " synth --out " +
-                          (fs::temp_directory_path() / "orchard_synth_cli").string() + " --trees 0 > " +
+                          (cli_dir / "out").string() + " --trees 0 > " +
                           log.string() + " 2>&1";
   const int rc = std::system(cmd.c_str());
   EXPECT_NE(rc, 0);
