@@ -48,6 +48,11 @@ void AddCountCommand(CLI::App& app) {
                   "finds the fruit pixels of patches (needed with --in)");
   cmd->add_option("--criterion", args->criterion, "Model selection: bic or aic")->capture_default_str();
   cmd->add_option("--max-fruits", args->counter.gmm.max_fruits, "Largest count per blob")->capture_default_str();
+  cmd->add_option("--min-separation", args->counter.gmm.min_separation,
+                  "gmm: fruits closer than this times the sum of their radii are one fruit (0 = off)")
+      ->capture_default_str();
+  cmd->add_option("--max-points", args->counter.gmm.max_points, "gmm: fruit pixels the mixtures are fitted to")
+      ->capture_default_str();
   cmd->add_option("--out", args->out, "counts.csv to write")->required();
   cmd->callback([args]() {
     args->counter.gmm.criterion = ParseModelSelection(args->criterion);

@@ -6,6 +6,7 @@
 #include "orchard/core/error.h"
 #include "orchard/core/file_io.h"
 #include "orchard/core/frame_source.h"
+#include "orchard/count/gmm_counter.h"
 #include "orchard/detect/detector_factory.h"
 
 namespace orchard {
@@ -16,6 +17,7 @@ void AddDetectCommand(CLI::App& app) {
     std::string in, out;
     DetectorChoice detector;
     FrameSourceOptions frames;
+    bool fruit_boxes = false;
   };
   auto args = std::make_shared<Args>();
   cmd->add_option("--method", args->detector.method, "Detector: gmm (colour mixtures) or unet (segmentation network)")
@@ -31,6 +33,9 @@ void AddDetectCommand(CLI::App& app) {
                 "gmm: OpenCV's SLIC at full resolution (slow reference path)");
   cmd->add_option("--min-blob-pixels", args->detector.blobs.min_pixels, "Drop blobs smaller than this")
       ->capture_default_str();
+  cmd->add_flag("--fruit-boxes", args->fruit_boxes,
+                "detections.csv: one box per fruit (each blob split by the mixture counter: centre +- radius) "
+                "instead of one per blob");
   cmd->add_option("--step", args->frames.step, "Keep every n-th frame")->capture_default_str();
   cmd->add_option("--max-frames", args->frames.max_frames, "Stop after this many frames (0 = all)")
       ->capture_default_str();
@@ -40,9 +45,12 @@ void AddDetectCommand(CLI::App& app) {
     FrameSource source(args->in, args->frames);
     const fs::path out = args->out;
     std::vector<NamedDetection> results;
+    GmmCounter splitter{GmmCounterOptions()};
+    Predictions fruits;
     Frame frame;
     while (source.Next(&frame)) {
       NamedDetection r{frame.name, detector->Detect(frame.image)};
+      if (args->fruit_boxes) fruits[frame.name] = FruitBoxes(frame.image, r.detection, splitter);
       WriteImageAtomic(out / "masks" / (fs::path(frame.name).stem().string() + ".png"), InstanceMask(r.detection));
       // Keep only the blob list in memory, not the masks.
       r.detection.mask.release();
@@ -50,7 +58,8 @@ void AddDetectCommand(CLI::App& app) {
       results.push_back(std::move(r));
       if (results.size() % 50 == 0) spdlog::info("{} frames", results.size());
     }
-    WriteDetectionsCsv(results, out / "detections.csv");
+    if (args->fruit_boxes) WriteCodaLabDetections(fruits, out / "detections.csv");
+    else WriteDetectionsCsv(results, out / "detections.csv");
     WriteBlobsCsv(results, out / "blobs.csv");
     size_t blobs = 0;
     for (const auto& r : results) blobs += r.detection.blobs.size();

@@ -20,6 +20,7 @@
 #include <nlohmann/json.hpp>
 
 #include "orchard/cli/commands.h"
+#include "orchard/cli/dataset_subset.h"
 #include "orchard/core/error.h"
 #include "orchard/core/file_io.h"
 #include "orchard/data/dataset.h"
@@ -50,6 +51,7 @@ struct EvalDetectOptions {
   std::vector<std::string> preds;  // [NAME=]FILE, CodaLab csv or COCO results json
   std::string out;                 // output folder
   bool plots = true;               // draw PNG/SVG with gnuplot
+  SubsetArgs subset;               // evaluate on these photos only (predictions on others ignored)
 
   void Check() const {
     ORCHARD_CHECK_OPTION(!gt.empty(), "--gt is required");
@@ -114,12 +116,18 @@ void RunEvalDetect(const EvalDetectOptions& options) {
   }
   const std::optional<DatasetFormat> format =
       options.gt_format.empty() ? std::nullopt : std::optional(ParseDatasetFormat(options.gt_format));
-  const Dataset gt = ReadDataset(options.gt, format);
+  const Dataset gt = options.subset.Select(ReadDataset(options.gt, format));
   if (gt.images.empty()) Fail("no images in the ground truth ", options.gt);
 
   std::vector<DetectionMetrics> results;
   for (const Method& method : methods) {
-    const Predictions predictions = ReadPredictions(method.file, gt);
+    Predictions predictions = ReadPredictions(method.file, gt);
+    if (options.subset.subset != "all") {
+      // Predictions on the other side of the split are not evaluated.
+      for (auto it = predictions.begin(); it != predictions.end();) {
+        it = gt.Find(it->first) ? std::next(it) : predictions.erase(it);
+      }
+    }
     try {
       results.push_back(EvaluateDetections(gt, predictions));
     } catch (const Error& e) {
@@ -334,6 +342,7 @@ void AddEvalCommand(CLI::App& app) {
       ->required();
   d->add_option("--gt-format", detect->gt_format,
                 "minneapple, yolo, coco or via (default: detected from --gt)");
+  detect->subset.AddOptions(d, "all");
   d->add_option("--pred", detect->preds,
                 "[NAME=]FILE: CodaLab detections (name,x1,y1,x2,y2,score) or COCO results json; "
                 "repeat to compare methods (NAME defaults to the file stem)")

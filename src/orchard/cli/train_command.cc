@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include "orchard/cli/commands.h"
+#include "orchard/cli/dataset_subset.h"
 #include "orchard/core/error.h"
 #include "orchard/core/file_io.h"
 #include "orchard/data/dataset.h"
@@ -18,6 +19,7 @@ void AddTrainCommand(CLI::App& app) {
   struct Args {
     std::string images, clicks, annotations, out;
     ColourTrainingOptions options;
+    SubsetArgs subset;  // --annotations: train on these photos of the split
   };
   auto args = std::make_shared<Args>();
   gmm->add_option("--images", args->images, "Folder of training images (with --clicks)");
@@ -31,8 +33,10 @@ void AddTrainCommand(CLI::App& app) {
   gmm->add_option("--region-size", args->options.segmentation.superpixels.region_size,
                   "Superpixel size in image pixels")->capture_default_str();
   gmm->add_option("--apple-fraction", args->options.apple_pixel_fraction,
-                  "Annotations: a class is apple when more than this fraction of its pixels lie in apples")
+                  "Annotations: a class is apple when more than this fraction of its pixels lie in apples "
+                  "(0 = the fraction that maximises the apple-pixel F1 on the training images)")
       ->capture_default_str();
+  args->subset.AddOptions(gmm, "train");
   gmm->add_option("--seed", args->options.seed, "EM initialisation seed")->capture_default_str();
   gmm->callback([args]() {
     ColourModel model;
@@ -41,9 +45,11 @@ void AddTrainCommand(CLI::App& app) {
       model = TrainColourModelFromClicks(ListImages(args->images), ReadClicks(args->clicks), args->options);
       model.trained_on = args->images + " (" + model.trained_on + " from " + args->clicks + ")";
     } else if (!args->annotations.empty()) {
-      const Dataset dataset = ReadDataset(args->annotations);
+      const Dataset dataset = args->subset.Select(ReadDataset(args->annotations));
       model = TrainColourModelFromAnnotations(dataset, args->options);
-      model.trained_on = args->annotations + " (" + model.trained_on + ")";
+      model.trained_on = args->annotations + " (" + model.trained_on + "; photos: " + args->subset.subset +
+                         ", test fraction " + std::to_string(args->subset.test_fraction) + ", split seed " +
+                         std::to_string(args->subset.split_seed) + ")";
     } else {
       Fail("give --clicks FILE (with --images DIR) or --annotations PATH");
     }

@@ -22,6 +22,7 @@ void GmmCounterOptions::Check() const {
   ORCHARD_CHECK_OPTION(restarts >= 1, "restarts must be >= 1, got ", restarts);
   ORCHARD_CHECK_OPTION(max_points >= 10, "max_points must be >= 10, got ", max_points);
   ORCHARD_CHECK_OPTION(min_points_per_fruit >= 3, "min_points_per_fruit must be >= 3, got ", min_points_per_fruit);
+  ORCHARD_CHECK_OPTION(min_separation >= 0, "min_separation must be >= 0, got ", min_separation);
 }
 
 GmmCounter::GmmCounter(const GmmCounterOptions& options, std::shared_ptr<const ColourModel> colour_model)
@@ -35,6 +36,22 @@ cv::Mat1b ColourFruitMask(const cv::Mat& bgr_patch, const ColourModel& model) {
   GmmDetector detector(model, options);
   return detector.Detect(bgr_patch).mask;
 }
+
+namespace {
+
+// A uniform disc of radius r has variance r^2 / 4 along each axis.
+double FruitRadius(const Gaussian& g) { return 2.0 * std::sqrt(std::sqrt(std::max(0.0, g.covariance.determinant()))); }
+
+bool Separated(const GaussianMixture& m, double min_separation) {
+  for (int i = 0; i < m.NumComponents(); ++i)
+    for (int j = i + 1; j < m.NumComponents(); ++j) {
+      const double d = (m.components[i].mean - m.components[j].mean).norm();
+      if (d < min_separation * (FruitRadius(m.components[i]) + FruitRadius(m.components[j]))) return false;
+    }
+  return true;
+}
+
+}  // namespace
 
 BlobCount GmmCounter::Count(const cv::Mat& bgr_patch, const cv::Mat1b& fruit_mask) {
   if (bgr_patch.empty()) Fail("cannot count apples in an empty patch");
@@ -85,15 +102,31 @@ BlobCount GmmCounter::Count(const cv::Mat& bgr_patch, const cv::Mat1b& fruit_mas
       if (f.log_likelihood > fit.log_likelihood) fit = f;
     }
     const double score = options_.criterion == ModelSelection::kBic ? fit.Bic() : fit.Aic();
-    if (score < best_score) best_score = score, best = fit.mixture;
+    if (score < best_score && Separated(fit.mixture, options_.min_separation)) best_score = score, best = fit.mixture;
   }
   result.count = best.NumComponents();
-  for (const Gaussian& g : best.components) {
-    // A uniform disc of radius r has variance r^2 / 4 along each axis.
-    const double r = 2.0 * std::sqrt(std::sqrt(std::max(0.0, g.covariance.determinant())));
-    result.fruits.push_back({{g.mean[0], g.mean[1]}, r});
-  }
+  for (const Gaussian& g : best.components) result.fruits.push_back({{g.mean[0], g.mean[1]}, FruitRadius(g)});
   return result;
+}
+
+std::vector<ScoredBox> FruitBoxes(const cv::Mat& bgr, const FrameDetection& detection, Counter& counter) {
+  std::vector<ScoredBox> boxes;
+  const cv::Rect frame(0, 0, bgr.cols, bgr.rows);
+  for (const Blob& b : detection.blobs) {
+    const cv::Rect roi = cv::Rect(static_cast<int>(std::floor(b.box.x1)), static_cast<int>(std::floor(b.box.y1)),
+                                  static_cast<int>(std::ceil(b.box.Width())), static_cast<int>(std::ceil(b.box.Height()))) &
+                         frame;
+    if (roi.empty()) continue;
+    const cv::Mat1b mask = detection.labels(roi) == b.id;
+    const BlobCount c = counter.Count(bgr(roi), mask);
+    for (const Fruit& f : c.fruits) {
+      const double x = f.centre.x + roi.x, y = f.centre.y + roi.y;
+      boxes.push_back({{std::max(0.0, x - f.radius), std::max(0.0, y - f.radius),
+                        std::min<double>(bgr.cols, x + f.radius), std::min<double>(bgr.rows, y + f.radius)},
+                       b.score});
+    }
+  }
+  return boxes;
 }
 
 }  // namespace orchard

@@ -10,6 +10,8 @@
 #include <string>
 
 #include "orchard/count/counter.h"
+#include "orchard/data/dataset.h"
+#include "orchard/detect/detector.h"
 #include "orchard/detect/gmm/colour_model.h"
 
 namespace orchard {
@@ -33,6 +35,12 @@ struct GmmCounterOptions {
   int restarts = 3;
   // Fewer fruit pixels than this per component makes a k impossible.
   int min_points_per_fruit = 8;
+  // A k is admissible only when every two fruits are at least this far apart,
+  // in units of the sum of their radii (fruit radius = 2 sqrt(sqrt(det C)), exact
+  // for a uniform disc). Touching equal discs give 1; a single disc split in two
+  // by EM gives about 0.58, so the information criterion alone, which prefers
+  // splitting filled discs (not Gaussians), cannot over-count. 0 disables it.
+  double min_separation = 0.7;
   std::uint64_t seed = 0;
   void Check() const;
 };
@@ -50,5 +58,10 @@ class GmmCounter : public Counter {
 
 // Fruit pixels of a patch by the colour model (superpixels classified apple).
 cv::Mat1b ColourFruitMask(const cv::Mat& bgr_patch, const ColourModel& model);
+
+// One box per fruit: each blob of `detection` (found in `bgr`) is split by
+// `counter` into fruits, each boxed as centre +- radius (clipped to the frame)
+// with the blob's score. The fair comparison with per-apple ground-truth boxes.
+std::vector<ScoredBox> FruitBoxes(const cv::Mat& bgr, const FrameDetection& detection, Counter& counter);
 
 }  // namespace orchard

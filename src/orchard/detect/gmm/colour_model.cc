@@ -1,6 +1,7 @@
 #include "orchard/detect/gmm/colour_model.h"
 
 #include <algorithm>
+#include <functional>
 #include <cmath>
 #include <limits>
 
@@ -121,6 +122,7 @@ void WriteColourModel(const ColourModel& model, const fs::path& path) {
                       {"features", "superpixel mean colour"},
                       {"supervision", model.supervision},
                       {"trained_on", model.trained_on},
+                      {"apple_rule", model.apple_rule},
                       {"segmentation", SegmentationToJson(model.segmentation)},
                       {"classes", classes}};
   WriteTextFileAtomic(path, j.dump(1) + "\n");
@@ -143,6 +145,7 @@ ColourModel ReadColourModel(const fs::path& path) {
   try {
     model.supervision = j.value("supervision", "");
     model.trained_on = j.value("trained_on", "");
+    model.apple_rule = j.value("apple_rule", "");
     const nlohmann::json& s = j.at("segmentation");
     model.segmentation.superpixels.region_size = s.at("region_size").get<int>();
     model.segmentation.superpixels.compactness = s.at("compactness").get<double>();
@@ -172,8 +175,9 @@ ColourModel ReadColourModel(const fs::path& path) {
 void ColourTrainingOptions::Check() const {
   ORCHARD_CHECK_OPTION(num_classes >= 2, "need at least 2 colour classes, got ", num_classes);
   ORCHARD_CHECK_OPTION(max_samples >= num_classes, "max_samples must be >= num_classes, got ", max_samples);
-  ORCHARD_CHECK_OPTION(apple_pixel_fraction > 0 && apple_pixel_fraction < 1,
-                       "apple_pixel_fraction must be in (0, 1), got ", apple_pixel_fraction);
+  ORCHARD_CHECK_OPTION(apple_pixel_fraction >= 0 && apple_pixel_fraction < 1,
+                       "apple_pixel_fraction must be in [0, 1) (0 = chosen for the best F1), got ", apple_pixel_fraction);
+  ORCHARD_CHECK_OPTION(min_clicks_per_class >= 1, "min_clicks_per_class must be >= 1, got ", min_clicks_per_class);
   segmentation.Check();
 }
 
@@ -218,6 +222,8 @@ ColourModel TrainColourModelFromClicks(const std::vector<fs::path>& images, cons
   std::vector<std::vector<int>> clicked_superpixels(images.size());  // per image
   std::vector<Eigen::MatrixXd> clicked_means;
   for (size_t i = 0; i < images.size(); ++i) {
+    // Classes come from the clicked frames only (the user clicks on the first few).
+    if (std::find(click_image.begin(), click_image.end(), static_cast<int>(i)) == click_image.end()) continue;
     const cv::Mat bgr = ReadImage(images[i]);
     const SegmentedFrame f = SegmentFrame(bgr, options.segmentation);
     features.push_back(MeansMatrix(f.colours));
@@ -240,17 +246,22 @@ ColourModel TrainColourModelFromClicks(const std::vector<fs::path>& images, cons
   model.segmentation = options.segmentation;
   model.segmentation.superpixels.use_opencv = false;
   model.supervision = "clicks";
-  std::vector<bool> flags(model.mixture.NumComponents(), false);
+  std::vector<int> votes(model.mixture.NumComponents(), 0);
   for (const Eigen::MatrixXd& m : clicked_means) {
     if (m.rows() == 0) continue;
     const Eigen::MatrixXd post = model.mixture.Posteriors(m);
     for (Eigen::Index r = 0; r < post.rows(); ++r) {
       Eigen::Index best;
       post.row(r).maxCoeff(&best);
-      flags[best] = true;
+      ++votes[best];
     }
   }
-  model.apple = flags;
+  model.apple.assign(votes.size(), false);
+  for (size_t j = 0; j < votes.size(); ++j) model.apple[j] = votes[j] >= options.min_clicks_per_class;
+  if (model.NumApple() == 0)
+    Fail("no colour class got ", options.min_clicks_per_class, " clicks (the ", clicks.size(),
+         " clicks fall in ", std::count_if(votes.begin(), votes.end(), [](int v) { return v > 0; }),
+         " different classes): click more apples or lower the agreement");
   model.trained_on = std::to_string(images.size()) + " images, " + std::to_string(clicks.size()) + " clicks";
   model.Validate();
   return model;
@@ -261,6 +272,7 @@ ColourModel TrainColourModelFromAnnotations(const Dataset& dataset, const Colour
   if (dataset.images.empty()) Fail("the annotated training set has no images");
   std::vector<Eigen::MatrixXd> features;
   std::vector<std::vector<double>> apple_pixels, total_pixels;  // per image, per superpixel
+  std::vector<Eigen::Matrix3d> covariances;                     // all superpixels, in order
   for (const AnnotatedImage& image : dataset.images) {
     if (image.path.empty()) Fail("annotated image ", image.name, " has no image file");
     const cv::Mat bgr = ReadImage(image.path);
@@ -277,6 +289,7 @@ ColourModel TrainColourModelFromAnnotations(const Dataset& dataset, const Colour
       for (int x = 0; x < apples.cols; ++x)
         if (apples(y, x)) in[f.superpixels.labels(y, x)] += 1;
     features.push_back(MeansMatrix(f.colours));
+    covariances.insert(covariances.end(), f.colours.covariance.begin(), f.colours.covariance.end());
     apple_pixels.push_back(in);
     total_pixels.emplace_back(f.colours.pixels.begin(), f.colours.pixels.end());
   }
@@ -296,9 +309,51 @@ ColourModel TrainColourModelFromAnnotations(const Dataset& dataset, const Colour
       class_total[best] += total_pixels[i][r];
     }
   }
-  model.apple.assign(k, false);
-  for (int j = 0; j < k; ++j)
-    model.apple[j] = class_total[j] > 0 && class_apple[j] / class_total[j] > options.apple_pixel_fraction;
+  std::vector<double> fraction(k, 0.0);
+  for (int j = 0; j < k; ++j) fraction[j] = class_total[j] > 0 ? class_apple[j] / class_total[j] : 0.0;
+  auto mark = [&](double threshold) {
+    model.apple.assign(k, false);
+    for (int j = 0; j < k; ++j) model.apple[j] = fraction[j] > threshold;
+  };
+  if (options.apple_pixel_fraction > 0) {
+    mark(options.apple_pixel_fraction);
+  } else {
+    // Candidate rules: the top-m classes by apple fraction, m = 1..k-1; each is
+    // scored by the apple-pixel F1 of the detector's own superpixel decision
+    // on (an even subsample of) the training superpixels.
+    std::vector<double> sorted = fraction;
+    std::sort(sorted.begin(), sorted.end(), std::greater<double>());
+    std::vector<Eigen::Vector3d> means;
+    std::vector<double> in, total;
+    for (size_t i = 0; i < features.size(); ++i)
+      for (Eigen::Index r = 0; r < features[i].rows(); ++r) {
+        means.push_back(features[i].row(r).transpose());
+        in.push_back(apple_pixels[i][r]);
+        total.push_back(total_pixels[i][r]);
+      }
+    const size_t step = std::max<size_t>(1, means.size() / options.max_samples);
+    double best_f1 = -1, best_threshold = 0.5;
+    for (int m = 1; m < k; ++m) {
+      const double threshold = 0.5 * (sorted[m - 1] + sorted[m]);
+      if (!(sorted[m - 1] > sorted[m])) continue;
+      mark(threshold);
+      const ColourClassifier classifier(model);
+      double tp = 0, fp = 0, fn = 0;
+      for (size_t i = 0; i < means.size(); i += step) {
+        bool is_apple;
+        float posterior;
+        classifier.Classify(means[i], covariances[i], &is_apple, &posterior);
+        if (is_apple) tp += in[i], fp += total[i] - in[i];
+        else fn += in[i];
+      }
+      const double f1 = tp > 0 ? 2 * tp / (2 * tp + fp + fn) : 0;
+      if (f1 > best_f1) best_f1 = f1, best_threshold = threshold;
+    }
+    mark(best_threshold);
+    model.apple_rule = "apple fraction > " + std::to_string(best_threshold) +
+                       " (best training apple-pixel F1 " + std::to_string(best_f1) + ")";
+  }
+  if (model.apple_rule.empty()) model.apple_rule = "apple fraction > " + std::to_string(options.apple_pixel_fraction);
   model.trained_on = std::to_string(dataset.images.size()) + " annotated images, " +
                      std::to_string(dataset.NumObjects()) + " boxes";
   model.Validate();

@@ -51,6 +51,7 @@ struct ColourModel {
   SegmentationOptions segmentation;  // as used in training; detection reuses it
   std::string supervision;      // "clicks" or "annotations"
   std::string trained_on;       // free text: images/annotations the model came from
+  std::string apple_rule;       // free text: how the apple classes were chosen
 
   // Throws orchard::Error when components/flags are inconsistent or there is
   // no apple class or no background class.
@@ -71,8 +72,12 @@ struct ColourTrainingOptions {
   int max_samples = 60000;
   // Annotations: a class is apple when more than this fraction of the pixels of
   // the training superpixels it explains best lie inside apples (ellipses
-  // inscribed in the annotated boxes).
-  double apple_pixel_fraction = 0.5;
+  // inscribed in the annotated boxes). 0 (default): the fraction is chosen so
+  // that the detector's superpixel decision has the best apple-pixel F1 on the
+  // training images.
+  double apple_pixel_fraction = 0;
+  // Clicks: a class is apple when at least this many clicks fall in it.
+  int min_clicks_per_class = 1;
   std::uint64_t seed = 0;
   SegmentationOptions segmentation;
 
@@ -88,8 +93,9 @@ struct Click {
 std::vector<Click> ReadClicks(const fs::path& path);
 void WriteClicks(const std::vector<Click>& clicks, const fs::path& path);
 
-// User-supervised: classes fitted on the superpixels of `images`; the class of
-// the superpixel under each click is apple. Throws when there are no clicks, a
+// User-supervised: classes fitted on the superpixels of the images of `images`
+// that the clicks are on; the class of the superpixel under each click is
+// apple (when min_clicks_per_class clicks agree). Throws when there are no clicks, a
 // click names an image not in `images` or falls outside it.
 ColourModel TrainColourModelFromClicks(const std::vector<fs::path>& images, const std::vector<Click>& clicks,
                                        const ColourTrainingOptions& options);
