@@ -4,7 +4,9 @@
 // (held-out photos), cut to 1080 rows; boxes are shifted, and those cut by the
 // frame edge are clipped (dropped when less than half remains).
 //
-//   bench_gmm MODEL.json YOLO_DIR [FRAMES=10]
+//   bench_gmm MODEL.json YOLO_DIR [FRAMES=10 [TEST_FRACTION SPLIT_SEED]]
+// With TEST_FRACTION, only the test photos of SplitByPhoto(TEST_FRACTION,
+// SPLIT_SEED) are used (the split of `--test-fraction F --split-seed S`).
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -14,6 +16,7 @@
 #include "orchard/core/error.h"
 #include "orchard/core/file_io.h"
 #include "orchard/data/dataset.h"
+#include "orchard/data/split.h"
 #include "orchard/detect/gmm/gmm_detector.h"
 #include "orchard/eval/detection_metrics.h"
 
@@ -93,18 +96,21 @@ double Mean(const std::vector<double>& v) {
 
 int main(int argc, char** argv) {
   if (argc < 3) {
-    std::fprintf(stderr, "usage: %s MODEL.json YOLO_DIR [FRAMES=10]\n", argv[0]);
+    std::fprintf(stderr, "usage: %s MODEL.json YOLO_DIR [FRAMES=10 [TEST_FRACTION SPLIT_SEED]]\n", argv[0]);
     return 2;
   }
   try {
     const ColourModel model = ReadColourModel(argv[1]);
-    const Dataset crops = ReadDataset(argv[2]);
+    Dataset crops = ReadDataset(argv[2]);
+    if (argc > 5) crops = SplitByPhoto(crops, std::atof(argv[4]), std::strtoull(argv[5], nullptr, 10)).test;
     const int frames = argc > 3 ? std::atoi(argv[3]) : 10;
     const Mosaics m = MakeMosaics(crops, frames);
     std::printf("%d frames 1920x1080 (3x2 mosaics of %zu crops from %s), %zu boxes\n", frames,
                 crops.images.size(), argv[2], m.truth.NumObjects());
     const PathResult fast = Run(model, false, m);
-    const PathResult ref = Run(model, true, m);
+    // "fast" after the split arguments skips the reference path (for profiling).
+    const bool fast_only = argc > 6 && std::string(argv[6]) == "fast";
+    const PathResult ref = fast_only ? fast : Run(model, true, m);
     std::printf("%-28s %10s %8s %10s %10s %10s\n", "path", "frames/s", "F1@0.5", "P@0.5", "R@0.5", "meanF1");
     auto row = [](const char* name, const PathResult& r) {
       const int i50 = 49;  // iou[49] = 0.50

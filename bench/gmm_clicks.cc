@@ -9,7 +9,8 @@
 // and leaves in front of the fruit (minorities of the ellipse) are avoided.
 // No colour knowledge of apples is used.
 //
-//   gmm_clicks YOLO_DIR TEST_FRACTION SPLIT_SEED NUM_IMAGES CLICKS OUT.json
+//   gmm_clicks YOLO_DIR TEST_FRACTION SPLIT_SEED NUM_IMAGES CLICKS OUT.json [train|test]
+// (train: the same on the training photos, to choose options without test data)
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -58,12 +59,13 @@ cv::Point ClickOnFruitBody(const cv::Mat& lab, const Box& box) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc != 7) {
-    std::fprintf(stderr, "usage: %s YOLO_DIR TEST_FRACTION SPLIT_SEED NUM_IMAGES CLICKS OUT.json\n", argv[0]);
+  if (argc != 7 && argc != 8) {
+    std::fprintf(stderr, "usage: %s YOLO_DIR TEST_FRACTION SPLIT_SEED NUM_IMAGES CLICKS OUT.json [train|test]\n", argv[0]);
     return 2;
   }
   try {
-    const Dataset test = SplitByPhoto(ReadDataset(argv[1]), std::atof(argv[2]), std::strtoull(argv[3], nullptr, 10)).test;
+    const DatasetSplit split = SplitByPhoto(ReadDataset(argv[1]), std::atof(argv[2]), std::strtoull(argv[3], nullptr, 10));
+    const Dataset& test = argc == 8 && std::string(argv[7]) == "train" ? split.train : split.test;
     const int num_images = std::atoi(argv[4]), per_image = std::atoi(argv[5]);
     std::vector<Click> clicks;
     int used = 0;

@@ -24,6 +24,9 @@ BUILD=$(cd "${2:-$ROOT/build}" && pwd)
 ORCHARD=$BUILD/orchard
 DATA=${ORCHARD_SHARED_DATA:-$ROOT/../shared/data}
 SPLIT=(--test-fraction 0.25 --split-seed 1)
+# Smallest blob kept: 700 px (of 640x640 crops) gave the best F1@0.5 on the
+# training photos of both datasets among 100..1500 (docs/detection.md).
+BLOBS=(--min-blob-pixels 700)
 
 for ds in applebbch81 applebbch76; do
   d=$OUT/$ds
@@ -38,8 +41,8 @@ for ds in applebbch81 applebbch76; do
   "$ORCHARD" train gmm --images "$d/click_images" --clicks "$clicks" --out "$d/user.json"
   preds=()
   for m in semi user; do
-    "$ORCHARD" detect --method gmm --model "$d/$m.json" --in "$yolo/images" --out "$d/det_${m}_blobs"
-    "$ORCHARD" detect --method gmm --model "$d/$m.json" --in "$yolo/images" --fruit-boxes --out "$d/det_${m}_fruits"
+    "$ORCHARD" detect --method gmm --model "$d/$m.json" --in "$yolo/images" "${BLOBS[@]}" --out "$d/det_${m}_blobs"
+    "$ORCHARD" detect --method gmm --model "$d/$m.json" --in "$yolo/images" "${BLOBS[@]}" --fruit-boxes --out "$d/det_${m}_fruits"
     preds+=(--pred "${m}_blobs=$d/det_${m}_blobs/detections.csv" --pred "${m}_fruits=$d/det_${m}_fruits/detections.csv")
   done
   "$ORCHARD" eval detect --gt "$yolo" "${SPLIT[@]}" --subset test "${preds[@]}" --out "$d/eval"

@@ -33,7 +33,7 @@ void AddCountCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "count", "Count apples per blob: counts.csv (name,count per image) and fruits.csv beside it");
   struct Args {
-    std::string images, blobs, masks, in, out, criterion = "bic";
+    std::string images, blobs, masks, in, out, criterion = "coverage";
     CounterChoice counter;
   };
   auto args = std::make_shared<Args>();
@@ -46,7 +46,7 @@ void AddCountCommand(CLI::App& app) {
   cmd->add_option("--model", args->counter.model,
                   "cnn: counter model .pt (default: the shipped models/counter.pt); gmm: colour model json that "
                   "finds the fruit pixels of patches (needed with --in)");
-  cmd->add_option("--criterion", args->criterion, "Model selection: bic or aic")->capture_default_str();
+  cmd->add_option("--criterion", args->criterion, "gmm model selection: coverage (fruit discs cover the blob), bic or aic")->capture_default_str();
   cmd->add_option("--max-fruits", args->counter.gmm.max_fruits, "Largest count per blob")->capture_default_str();
   cmd->add_option("--min-separation", args->counter.gmm.min_separation,
                   "gmm: fruits closer than this times the sum of their radii are one fruit (0 = off)")

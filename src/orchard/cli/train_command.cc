@@ -37,6 +37,9 @@ void AddTrainCommand(CLI::App& app) {
                   "(0 = the fraction that maximises the apple-pixel F1 on the training images)")
       ->capture_default_str();
   args->subset.AddOptions(gmm, "train");
+  gmm->add_option("--min-clicks", args->options.min_clicks_per_class,
+                  "Clicks: a class is apple when at least this many clicks fall in it")
+      ->capture_default_str();
   gmm->add_option("--seed", args->options.seed, "EM initialisation seed")->capture_default_str();
   gmm->callback([args]() {
     ColourModel model;

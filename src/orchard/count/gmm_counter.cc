@@ -5,6 +5,7 @@
 #include <random>
 
 #include <Eigen/LU>
+#include <opencv2/imgproc.hpp>
 
 #include "orchard/core/error.h"
 #include "orchard/detect/gmm/gmm_detector.h"
@@ -14,7 +15,8 @@ namespace orchard {
 ModelSelection ParseModelSelection(const std::string& name) {
   if (name == "bic") return ModelSelection::kBic;
   if (name == "aic") return ModelSelection::kAic;
-  Fail("unknown model-selection criterion '", name, "' (use bic or aic)");
+  if (name == "coverage") return ModelSelection::kCoverage;
+  Fail("unknown model-selection criterion '", name, "' (use coverage, bic or aic)");
 }
 
 void GmmCounterOptions::Check() const {
@@ -41,6 +43,17 @@ namespace {
 
 // A uniform disc of radius r has variance r^2 / 4 along each axis.
 double FruitRadius(const Gaussian& g) { return 2.0 * std::sqrt(std::sqrt(std::max(0.0, g.covariance.determinant()))); }
+
+// IoU of the blob's pixels and the union of the fruits drawn as discs.
+double DiscCoverage(const GaussianMixture& m, const cv::Mat1b& blob, double blob_pixels) {
+  cv::Mat1b discs(blob.size(), uchar(0));
+  for (const Gaussian& g : m.components)
+    cv::circle(discs, cv::Point(cvRound(g.mean[0]), cvRound(g.mean[1])), std::max(1, cvRound(FruitRadius(g))), 255,
+               cv::FILLED);
+  const double both = cv::countNonZero(discs & blob);
+  const double either = blob_pixels + cv::countNonZero(discs) - both;
+  return either > 0 ? both / either : 0.0;
+}
 
 bool Separated(const GaussianMixture& m, double min_separation) {
   for (int i = 0; i < m.NumComponents(); ++i)
@@ -87,6 +100,8 @@ BlobCount GmmCounter::Count(const cv::Mat& bgr_patch, const cv::Mat1b& fruit_mas
   const int k_max = std::max(1, std::min(options_.max_fruits, n / options_.min_points_per_fruit));
   double best_score = std::numeric_limits<double>::infinity();
   GaussianMixture best;
+  const cv::Mat1b blob = mask != 0;
+  const double blob_pixels = static_cast<double>(pixels.size());
   for (int k = 1; k <= k_max; ++k) {
     GaussianMixtureOptions em;
     em.num_components = k;
@@ -101,7 +116,15 @@ BlobCount GmmCounter::Count(const cv::Mat& bgr_patch, const cv::Mat1b& fruit_mas
       GaussianMixtureFit f = FitGaussianMixture(x, em);
       if (f.log_likelihood > fit.log_likelihood) fit = f;
     }
-    const double score = options_.criterion == ModelSelection::kBic ? fit.Bic() : fit.Aic();
+    double score = 0;
+    switch (options_.criterion) {
+      case ModelSelection::kBic: score = fit.Bic(); break;
+      case ModelSelection::kAic: score = fit.Aic(); break;
+      // Lower is better; each extra fruit must buy coverage_tolerance of IoU.
+      case ModelSelection::kCoverage:
+        score = -DiscCoverage(fit.mixture, blob, blob_pixels) + options_.coverage_tolerance * k;
+        break;
+    }
     if (score < best_score && Separated(fit.mixture, options_.min_separation)) best_score = score, best = fit.mixture;
   }
   result.count = best.NumComponents();

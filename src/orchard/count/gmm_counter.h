@@ -16,8 +16,12 @@
 
 namespace orchard {
 
-enum class ModelSelection { kBic, kAic };
-// "bic" / "aic" -> criterion; throws otherwise.
+// kCoverage: the smallest k whose fruits, drawn as discs (centre, radius from
+// the covariance), cover the blob (IoU of their union with the blob's pixels)
+// within coverage_tolerance of the best k. BIC/AIC on pixel positions prefer
+// splitting a filled disc, which is not a Gaussian.
+enum class ModelSelection { kBic, kAic, kCoverage };
+// "bic" / "aic" / "coverage" -> criterion; throws otherwise.
 ModelSelection ParseModelSelection(const std::string& name);
 
 struct GmmCounterOptions {
@@ -25,7 +29,9 @@ struct GmmCounterOptions {
   int max_fruits = 6;
   // BIC (default: on the MinneApple frames it was the better of the two, see
   // docs/detection.md) or AIC, which penalises components less and so counts more.
-  ModelSelection criterion = ModelSelection::kBic;
+  ModelSelection criterion = ModelSelection::kCoverage;
+  // kCoverage: IoU a larger k must gain over a smaller one to be chosen.
+  double coverage_tolerance = 0.03;
   // EM runs on at most this many fruit pixels (a seeded random subsample):
   // the criteria's penalties grow as ln N while the likelihood gain of extra
   // components on non-Gaussian (disc-shaped) fruit grows as N, so a fixed

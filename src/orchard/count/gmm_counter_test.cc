@@ -30,6 +30,25 @@ TEST(GmmCounter, CountsDiscsInABlob) {
   EXPECT_NEAR(one.fruits[0].radius, 25, 3.0);
 }
 
+TEST(GmmCounter, SeparationKeepsLargeDiscsWhole) {
+  // With many pixels the information criterion alone splits a filled disc;
+  // the separation rule keeps it one fruit and still splits a touching pair.
+  GmmCounterOptions options;
+  options.max_points = 2000;
+  GmmCounter counter(options);
+  const cv::Mat patch(200, 260, CV_8UC3, cv::Scalar::all(0));
+  EXPECT_EQ(counter.Count(patch, Discs({{130, 100}}, 60, {260, 200})).count, 1);
+  EXPECT_EQ(counter.Count(patch, Discs({{80, 100}, {180, 100}}, 50, {260, 200})).count, 2);
+  // Fruit boxes: one per fruit, in frame coordinates.
+  FrameDetection d = ExtractBlobs(Discs({{80, 100}, {180, 100}}, 50, {260, 200}), BlobOptions());
+  ASSERT_EQ(d.blobs.size(), 1u);
+  const std::vector<ScoredBox> boxes = FruitBoxes(patch, d, counter);
+  ASSERT_EQ(boxes.size(), 2u);
+  const double left = std::min(boxes[0].box.CenterX(), boxes[1].box.CenterX());
+  EXPECT_NEAR(left, 80, 4.0);
+  EXPECT_NEAR(boxes[0].box.Width(), 100, 12.0);
+}
+
 TEST(GmmCounter, EmptyBlobCountsAsOneAndBadInputThrows) {
   GmmCounter counter({});
   const cv::Mat patch(40, 40, CV_8UC3, cv::Scalar(0, 200, 0));

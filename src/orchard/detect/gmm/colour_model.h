@@ -76,8 +76,10 @@ struct ColourTrainingOptions {
   // that the detector's superpixel decision has the best apple-pixel F1 on the
   // training images.
   double apple_pixel_fraction = 0;
-  // Clicks: a class is apple when at least this many clicks fall in it.
-  int min_clicks_per_class = 1;
+  // Clicks: a class is apple when at least this many clicks fall in it. 2
+  // (chosen with simulated clicks on training photos, docs/detection.md) keeps
+  // a class that one click on a shaded fruit shares with foliage shadow out.
+  int min_clicks_per_class = 2;
   std::uint64_t seed = 0;
   SegmentationOptions segmentation;
 

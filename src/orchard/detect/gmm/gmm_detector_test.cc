@@ -53,6 +53,7 @@ class GmmDetectorTest : public ::testing::Test {
       WriteImageAtomic(images_.back(), scenes_.back().bgr);
     }
     options_.num_classes = 5;
+    options_.min_clicks_per_class = 1;
   }
   void TearDown() override { fs::remove_all(dir_); }
 
@@ -90,6 +91,17 @@ TEST_F(GmmDetectorTest, UserSupervisedFromClicksFindsRedDiscs) {
   ExpectFindsTheDiscs(model, true);
 }
 
+TEST_F(GmmDetectorTest, ClickAgreementMarksOnlyClassesSeveralClicksShare) {
+  options_.min_clicks_per_class = 2;
+  // One click: no class has two votes, a clear error.
+  EXPECT_THROW(TrainColourModelFromClicks(images_, {{"train_0.png", 60, 60}}, options_), Error);
+  // Two clicks on red discs agree on the red class.
+  const ColourModel model =
+      TrainColourModelFromClicks(images_, {{"train_0.png", 60, 60}, {"train_1.png", 120, 170}}, options_);
+  EXPECT_EQ(model.NumApple(), 1);
+  ExpectFindsTheDiscs(model, false);
+}
+
 TEST_F(GmmDetectorTest, SemiSupervisedFromAnnotationsFindsRedDiscs) {
   Dataset train;
   for (size_t i = 0; i < images_.size(); ++i) {
@@ -101,8 +113,12 @@ TEST_F(GmmDetectorTest, SemiSupervisedFromAnnotationsFindsRedDiscs) {
     for (const Box& b : scenes_[i].apples) image.objects.push_back({b});
     train.images.push_back(image);
   }
+  // Apple classes chosen for the best training F1 (default) and by a fixed fraction.
   const ColourModel model = TrainColourModelFromAnnotations(train, options_);
+  EXPECT_NE(model.apple_rule.find("best training apple-pixel F1"), std::string::npos) << model.apple_rule;
   ExpectFindsTheDiscs(model, false);
+  options_.apple_pixel_fraction = 0.5;
+  ExpectFindsTheDiscs(TrainColourModelFromAnnotations(train, options_), false);
 }
 
 TEST_F(GmmDetectorTest, ModelFileRoundTripAndBadFiles) {

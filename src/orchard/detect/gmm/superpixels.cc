@@ -60,6 +60,37 @@ int EnforceConnectivity(cv::Mat1i& labels, int min_size) {
   return next_label;
 }
 
+// One of the 9 neighbouring centres of every pixel of a row, spread out per
+// pixel (the centre of the pixel's cell offset by one grid step, clamped at
+// the border: a repeated centre never wins twice).
+struct SpreadCentres {
+  std::vector<float> l, a, b, x, y;
+  std::vector<int> id;
+  void Resize(int w) {
+    for (auto* v : {&l, &a, &b, &x, &y}) v->resize(w);
+    id.resize(w);
+  }
+};
+
+// A whole row against one spread neighbour: keeps the nearest centre per
+// pixel. The hot loop of the fast path, contiguous over the row so it
+// vectorises; compiled for AVX2 as well as the baseline, the CPU picks at load
+// time (GCC function multi-versioning).
+__attribute__((target_clones("avx2", "default"))) void AssignRow(
+    const float* __restrict pl, const float* __restrict pa, const float* __restrict pb,
+    const float* __restrict xs, int w, float fy, float spatial_weight, const float* __restrict kl,
+    const float* __restrict ka, const float* __restrict kb, const float* __restrict kx,
+    const float* __restrict ky, const int* __restrict kid, float* __restrict bd, int* __restrict bc) {
+  for (int x = 0; x < w; ++x) {
+    const float dl = pl[x] - kl[x], da = pa[x] - ka[x], db = pb[x] - kb[x];
+    const float dx = xs[x] - kx[x], dy = fy - ky[x];
+    const float d = dl * dl + da * da + db * db + (dx * dx + dy * dy) * spatial_weight;
+    const bool better = d < bd[x];
+    bd[x] = better ? d : bd[x];
+    bc[x] = better ? kid[x] : bc[x];
+  }
+}
+
 Superpixels FastSlic(const cv::Mat& lab8, const SuperpixelOptions& opt) {
   const int w = lab8.cols, h = lab8.rows;
   const int s = opt.region_size;
@@ -67,9 +98,12 @@ Superpixels FastSlic(const cv::Mat& lab8, const SuperpixelOptions& opt) {
   const float cw = static_cast<float>(w) / nx, ch = static_cast<float>(h) / ny;
   const float spatial_weight = static_cast<float>((opt.compactness / s) * (opt.compactness / s));
 
-  // Float planes once per image: the row loops below then vectorise.
+  // Separate float planes once per image: the row loops below then read
+  // contiguous floats and vectorise (interleaved LAB did not).
   cv::Mat3f labf;
   lab8.convertTo(labf, CV_32FC3);
+  cv::Mat1f planes[3];
+  cv::split(labf, planes);
   std::vector<Centre> centres(nx * ny);
   for (int cy = 0; cy < ny; ++cy) {
     for (int cx = 0; cx < nx; ++cx) {
@@ -82,6 +116,9 @@ Superpixels FastSlic(const cv::Mat& lab8, const SuperpixelOptions& opt) {
   // Column of the grid cell each pixel column lies in, and cell column spans.
   std::vector<int> cell_x0(nx + 1);
   for (int cx = 0; cx <= nx; ++cx) cell_x0[cx] = std::min(w, static_cast<int>(std::lround(cx * cw)));
+  std::vector<int> cell_of_x(w);
+  for (int cx = 0; cx < nx; ++cx)
+    for (int x = cell_x0[cx]; x < cell_x0[cx + 1]; ++x) cell_of_x[x] = cx;
 
   Superpixels result;
   result.labels.create(h, w);
@@ -97,36 +134,39 @@ Superpixels FastSlic(const cv::Mat& lab8, const SuperpixelOptions& opt) {
       std::vector<float> best_d(w), xs(w);
       std::vector<int> best_c(w);
       for (int x = 0; x < w; ++x) xs[x] = static_cast<float>(x);
+      SpreadCentres spread[9];
+      for (SpreadCentres& sc : spread) sc.Resize(w);
+      int spread_row = -1;  // cell row the spread centres were built for
       for (int band = range.start; band < range.end; ++band) {
         std::vector<double>& acc = sums[band].v;
         acc.assign(centres.size() * 6, 0.0);
         const int y0 = h * band / bands, y1 = h * (band + 1) / bands;
         for (int y = y0; y < y1; ++y) {
           const float* row = labf.ptr<float>(y);
+          const float* pl = planes[0].ptr<float>(y);
+          const float* pa = planes[1].ptr<float>(y);
+          const float* pb = planes[2].ptr<float>(y);
           const float fy = static_cast<float>(y);
           const int cy = std::min(ny - 1, static_cast<int>(y / ch));
           std::fill(best_d.begin(), best_d.end(), std::numeric_limits<float>::max());
-          for (int cx = 0; cx < nx; ++cx) {
-            const int x0 = cell_x0[cx], x1 = cell_x0[cx + 1];
-            for (int ny_ = std::max(0, cy - 1); ny_ <= std::min(ny - 1, cy + 1); ++ny_) {
-              for (int nx_ = std::max(0, cx - 1); nx_ <= std::min(nx - 1, cx + 1); ++nx_) {
+          if (cy != spread_row) {
+            // Neighbours in the order the per-cell search visited them
+            // (row-major), so ties resolve the same way.
+            for (int o = 0; o < 9; ++o) {
+              const int ny_ = std::clamp(cy + o / 3 - 1, 0, ny - 1);
+              SpreadCentres& sc = spread[o];
+              for (int x = 0; x < w; ++x) {
+                const int nx_ = std::clamp(cell_of_x[x] + o % 3 - 1, 0, nx - 1);
                 const int c = ny_ * nx + nx_;
-                const Centre k = centres[c];
-                const float dy2 = (fy - k.y) * (fy - k.y) * spatial_weight;
-                float* bd = best_d.data();
-                int* bc = best_c.data();
-                const float* px = xs.data();
-                for (int x = x0; x < x1; ++x) {
-                  const float dl = row[3 * x] - k.l, da = row[3 * x + 1] - k.a, db = row[3 * x + 2] - k.b;
-                  const float dx = px[x] - k.x;
-                  const float d = dl * dl + da * da + db * db + dx * dx * spatial_weight + dy2;
-                  const bool better = d < bd[x];
-                  bd[x] = better ? d : bd[x];
-                  bc[x] = better ? c : bc[x];
-                }
+                const Centre& k = centres[c];
+                sc.l[x] = k.l, sc.a[x] = k.a, sc.b[x] = k.b, sc.x[x] = k.x, sc.y[x] = k.y, sc.id[x] = c;
               }
             }
+            spread_row = cy;
           }
+          for (const SpreadCentres& sc : spread)
+            AssignRow(pl, pa, pb, xs.data(), w, fy, spatial_weight, sc.l.data(), sc.a.data(), sc.b.data(),
+                      sc.x.data(), sc.y.data(), sc.id.data(), best_d.data(), best_c.data());
           if (last) {
             std::copy(best_c.begin(), best_c.end(), result.labels.ptr<int>(y));
           } else {
