@@ -100,17 +100,17 @@ Superpixels FastSlic(const cv::Mat& lab8, const SuperpixelOptions& opt) {
 
   // Separate float planes once per image: the row loops below then read
   // contiguous floats and vectorise (interleaved LAB did not).
-  cv::Mat3f labf;
-  lab8.convertTo(labf, CV_32FC3);
+  cv::Mat1b planes8[3];
+  cv::split(lab8, planes8);
   cv::Mat1f planes[3];
-  cv::split(labf, planes);
+  for (int i = 0; i < 3; ++i) planes8[i].convertTo(planes[i], CV_32F);
   std::vector<Centre> centres(nx * ny);
   for (int cy = 0; cy < ny; ++cy) {
     for (int cx = 0; cx < nx; ++cx) {
       const int x = std::min(w - 1, static_cast<int>((cx + 0.5f) * cw));
       const int y = std::min(h - 1, static_cast<int>((cy + 0.5f) * ch));
-      const cv::Vec3f& p = labf(y, x);
-      centres[cy * nx + cx] = {p[0], p[1], p[2], static_cast<float>(x), static_cast<float>(y)};
+      centres[cy * nx + cx] = {planes[0](y, x), planes[1](y, x), planes[2](y, x), static_cast<float>(x),
+                               static_cast<float>(y)};
     }
   }
   // Column of the grid cell each pixel column lies in, and cell column spans.
@@ -142,7 +142,6 @@ Superpixels FastSlic(const cv::Mat& lab8, const SuperpixelOptions& opt) {
         acc.assign(centres.size() * 6, 0.0);
         const int y0 = h * band / bands, y1 = h * (band + 1) / bands;
         for (int y = y0; y < y1; ++y) {
-          const float* row = labf.ptr<float>(y);
           const float* pl = planes[0].ptr<float>(y);
           const float* pa = planes[1].ptr<float>(y);
           const float* pb = planes[2].ptr<float>(y);
@@ -172,9 +171,9 @@ Superpixels FastSlic(const cv::Mat& lab8, const SuperpixelOptions& opt) {
           } else {
             for (int x = 0; x < w; ++x) {
               double* a = &acc[6 * best_c[x]];
-              a[0] += row[3 * x];
-              a[1] += row[3 * x + 1];
-              a[2] += row[3 * x + 2];
+              a[0] += pl[x];
+              a[1] += pa[x];
+              a[2] += pb[x];
               a[3] += x;
               a[4] += y;
               a[5] += 1;
