@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
   orchard::AddDetectCommand(app);
   orchard::AddCountCommand(app);
   orchard::AddSideCommand(app);
+  orchard::AddYieldCommand(app);
   orchard::AddTrainNetworkCommands(app);  // after AddTrainCommand: adds to `train`
   orchard::AddPatchesCommand(app);
   orchard::AddSplitCommand(app);

@@ -1,6 +1,7 @@
 #include "orchard/fruitmap/side.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -127,6 +128,12 @@ ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std
   }
   Eigen::Vector3d mean, along, across;
   PathAxes(views, ground, &mean, &along, &across);
+  // Up is the ground normal on the cameras' side; along completes a
+  // right-handed frame (along = across x up), whichever way the camera moved.
+  r.row_up = ground.SignedDistance(mean) >= 0 ? ground.normal : Eigen::Vector3d(-ground.normal);
+  r.row_across = across;
+  r.row_along = across.cross(r.row_up).normalized();
+  r.row_origin = mean - ground.normal * ground.SignedDistance(mean);
   std::vector<std::pair<double, double>> tree_distances;  // distance, pixels
   for (auto& c : r.clusters) {
     c.count = MedianOfBestViews(c.views, o.best_views, &c.count_frames);
@@ -353,6 +360,14 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   if (!in.detector && in.masks.empty()) Fail("give a detector or a folder of instance masks");
   if (!in.detector && !fs::is_directory(in.masks)) Fail("masks folder ", in.masks.string(), " does not exist");
   fs::create_directories(in.out);
+  auto clock = std::chrono::steady_clock::now();
+  auto lap = [&clock]() {
+    const auto now = std::chrono::steady_clock::now();
+    const double s = std::chrono::duration<double>(now - clock).count();
+    clock = now;
+    return s;
+  };
+  SideSummary s;
   // Frames and poses.
   ColmapModel model;
   std::vector<std::string> unregistered;
@@ -429,6 +444,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
     ScaleViews(scale, &views);
     ground.d *= scale;
   }
+  s.poses_s = lap();
   // Fruit per frame (cached).
   std::vector<fs::path> image_paths;
   std::vector<FruitFrame> frames;
@@ -440,9 +456,11 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
            v.width, "x", v.height);
     if (frames.size() % 20 == 0) spdlog::info("fruit in {} of {} frames", frames.size(), views.size());
   }
+  s.fruit_s = lap();
   const ClusterResult r = CountFruitClusters(views, frames, ground, o.clusters);
+  s.clusters_s = lap();
   WriteOutputs(in.out, image_paths, frames, r, o);
-  SideSummary s;
+  s.outputs_s = lap();
   s.count = r.count;
   s.single_frame_sum = r.single_frame_sum;
   s.frames_used = static_cast<int>(views.size());
@@ -470,11 +488,16 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
       {"scale", scale},
       {"ground_plane", {{"normal", {ground.normal.x(), ground.normal.y(), ground.normal.z()}}, {"d", ground.d},
                         {"source", ground_source}}},
+      {"row_frame", {{"origin", {r.row_origin.x(), r.row_origin.y(), r.row_origin.z()}},
+                     {"along", {r.row_along.x(), r.row_along.y(), r.row_along.z()}},
+                     {"across", {r.row_across.x(), r.row_across.y(), r.row_across.z()}},
+                     {"up", {r.row_up.x(), r.row_up.y(), r.row_up.z()}}}},
       {"row_distance", r.row_distance},
       {"depth_cutoff", r.depth_cutoff},
       {"fruit_points", r.points.size()},
       {"clusters", {{"total", r.clusters.size()}, {"kept", s.clusters_kept}, {"removed", removed}}},
       {"warnings", warnings},
+      {"timings_s", {{"poses", s.poses_s}, {"fruit", s.fruit_s}, {"clusters", s.clusters_s}, {"outputs", s.outputs_s}}},
   };
   WriteTextFileAtomic(in.out / "side.json", j.dump(2) + "\n");
   spdlog::info("{} apples in {} clusters ({} removed); single-frame sum {}", s.count, s.clusters_kept,

@@ -72,6 +72,12 @@ struct ClusterResult {
   std::vector<FruitCluster> clusters;
   double row_distance = 0;
   double depth_cutoff = 0;
+  // The side's row frame in the poses' frame: origin = mean camera centre
+  // dropped onto the ground, x along the camera path, y across it towards the
+  // filmed row, z up (the ground normal). The two sides' merge works in it.
+  Eigen::Vector3d row_origin = Eigen::Vector3d::Zero();
+  Eigen::Vector3d row_along = Eigen::Vector3d::UnitX(), row_across = Eigen::Vector3d::UnitY(),
+                  row_up = Eigen::Vector3d::UnitZ();
   int count = 0;            // sum over kept clusters
   int single_frame_sum = 0; // sum of all blob counts over all frames
 };
@@ -118,6 +124,10 @@ struct SideSummary {
   int single_frame_sum = 0;
   int frames_used = 0, frames_registered = 0;
   int clusters_kept = 0, clusters_removed = 0;
+  // Wall-clock seconds of the stages (also in side.json): frames and poses,
+  // fruit per frame (detection and counting, or the cache), the 3D stage,
+  // writing the outputs.
+  double poses_s = 0, fruit_s = 0, clusters_s = 0, outputs_s = 0;
 };
 
 // Runs the side end to end and writes side.json, clusters.csv, fruit.ply,

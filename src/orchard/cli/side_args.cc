@@ -1,0 +1,88 @@
+#include "orchard/cli/side_args.h"
+
+#include <CLI/CLI.hpp>
+
+#include "orchard/core/error.h"
+#include "orchard/count/counter_factory.h"
+#include "orchard/detect/detector_factory.h"
+
+namespace orchard {
+
+void AddSideOptions(CLI::App* cmd, SideOptions* options) {
+  SideOptions& o = *options;
+  cmd->add_option("--frame-selection", o.frames.method, "step or motion")->capture_default_str();
+  cmd->add_option("--step", o.frames.step, "Keep every n-th frame (step)")->capture_default_str();
+  cmd->add_option("--motion", o.frames.motion_fraction, "Keep a frame after this median flow (fraction of width)")
+      ->capture_default_str();
+  cmd->add_option("--max-frames", o.frames.max_frames, "Stop after this many frames (0 = all)")->capture_default_str();
+  cmd->add_option("--camera-model", o.colmap.camera_model, "COLMAP camera model")->capture_default_str();
+  cmd->add_option("--colmap", o.colmap.colmap, "COLMAP executable")->capture_default_str();
+  cmd->add_option("--camera-height", o.camera_height, "Camera height above the ground (m): the scale")
+      ->capture_default_str();
+  cmd->add_flag("--rescale-poses", o.rescale_given_poses, "Scale given poses by the camera height too");
+  cmd->add_option("--link-distance", o.clusters.link_distance, "Fruit points closer than this (m) form a cluster")
+      ->capture_default_str();
+  cmd->add_option("--min-support", o.clusters.points.min_support, "A fruit point must land on fruit in this many frames")
+      ->capture_default_str();
+  cmd->add_option("--support-ratio", o.clusters.points.min_support_ratio,
+                  "... and in this fraction of the frames it falls into")
+      ->capture_default_str();
+  cmd->add_option("--support-window", o.clusters.points.support_window, "Frames either side checked for support")
+      ->capture_default_str();
+  cmd->add_option("--centre-fraction", o.clusters.points.centre_fraction,
+                  "Support only near blob centres (fraction of the blob radius, 0 = anywhere on the blob)")
+      ->capture_default_str();
+  cmd->add_option("--partner-min", o.clusters.points.min_partner_offset, "Nearest partner frame for a first triangulation")
+      ->capture_default_str();
+  cmd->add_option("--partner-max", o.clusters.points.max_partner_offset, "Farthest partner frame")
+      ->capture_default_str();
+  cmd->add_option("--min-cluster-points", o.clusters.min_points, "Fewest fruit points of a cluster")
+      ->capture_default_str();
+  cmd->add_option("--fallen-height", o.clusters.fallen_height, "Clusters lower than this (m) are fallen apples")
+      ->capture_default_str();
+  cmd->add_option("--row-distance", o.clusters.row_distance, "Camera path to row centre (m), 0 = estimate")
+      ->capture_default_str();
+  cmd->add_option("--next-row-margin", o.clusters.next_row_margin, "Beyond row distance + this (m): next row")
+      ->capture_default_str();
+  cmd->add_option("--near-margin", o.clusters.near_margin, "Nearer than row distance - this (m): removed")
+      ->capture_default_str();
+  cmd->add_option("--draw-every", o.draw_every, "Annotate every n-th frame (0 = none)")->capture_default_str();
+}
+
+void AddFruitOptions(CLI::App* cmd, FruitArgs* a) {
+  cmd->add_option("--detector", a->detector, "Fruit: gmm, unet, or masks (the generator's instance masks)")
+      ->capture_default_str();
+  cmd->add_option("--model", a->model, "Detector model (default: the shipped model of the detector)");
+  cmd->add_option("--counter", a->counter, "Apples per blob: cnn, gmm, or blob (one each)")->capture_default_str();
+  cmd->add_option("--counter-model", a->counter_model, "Counter model (default: the shipped one)");
+  cmd->add_option("--threads", a->threads, "Detector and counter threads (0 = all cores)")->capture_default_str();
+}
+
+void SetUpFruit(const FruitArgs& a, const std::string& masks, FruitTools* tools, SideInputs* in) {
+  if (a.detector == "masks") {
+    if (masks.empty()) Fail("--detector masks needs the instance-mask folder (--masks)");
+    in->masks = masks;
+    in->detector_name = "masks";
+  } else {
+    if (!tools->detector) {
+      DetectorChoice choice;
+      choice.method = a.detector;
+      choice.model = a.model;
+      choice.threads = a.threads;
+      tools->detector = MakeDetector(choice);
+    }
+    in->detector = tools->detector.get();
+    in->detector_name = a.detector + ":" + (a.model.empty() ? DefaultDetectorModel(a.detector).string() : a.model);
+  }
+  if (a.counter != "blob" && !tools->counter) {
+    CounterChoice choice;
+    choice.method = a.counter;
+    choice.model = a.counter_model;
+    choice.threads = a.threads;
+    tools->counter = MakeCounter(choice);
+  }
+  in->counter = tools->counter.get();
+  in->counter_name = a.counter + (a.counter_model.empty() ? "" : ":" + a.counter_model);
+}
+
+}  // namespace orchard

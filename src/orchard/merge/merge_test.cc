@@ -1,0 +1,187 @@
+// Registration of two sides on synthetic geometry with known transforms, its
+// failures (unrelated rows, different stretches of a row), and the
+// inclusion-exclusion arithmetic of the shared count.
+#include <algorithm>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "orchard/core/error.h"
+#include "orchard/merge/registration.h"
+#include "orchard/merge/shared_count.h"
+#include "orchard/merge/side_cloud.h"
+
+namespace orchard {
+namespace {
+
+SideCluster Cluster(int id, int count, std::vector<Eigen::Vector3d> points) {
+  SideCluster c;
+  c.id = id, c.count = count, c.points = std::move(points);
+  UpdateClusterExtent(&c);
+  return c;
+}
+
+// Apples of a thin canopy in the front row frame: x along [x0, x1], y across
+// 2.2..2.8 m from the front camera path, z 0.8..2.8 m, at least 9 cm apart.
+std::vector<Eigen::Vector3d> Canopy(int n, double x0, double x1, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> ux(x0, x1), uy(2.2, 2.8), uz(0.8, 2.8);
+  std::vector<Eigen::Vector3d> apples;
+  while (static_cast<int>(apples.size()) < n) {
+    const Eigen::Vector3d p(ux(rng), uy(rng), uz(rng));
+    bool free = true;
+    for (const auto& a : apples) free &= (a - p).norm() > 0.09;
+    if (free) apples.push_back(p);
+  }
+  return apples;
+}
+
+// The front side sees the apples nearer than 2.6 m, the back those beyond
+// 2.4 m (so the 2.4-2.6 m slab is seen from both), each with 1 cm noise; the
+// back cloud is expressed in its own row frame through `back_to_front`.
+void Sides(const std::vector<Eigen::Vector3d>& apples, const Eigen::Isometry3d& back_to_front, unsigned seed,
+           SideCloud* front, SideCloud* back) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0, 0.01);
+  auto jitter = [&](const Eigen::Vector3d& p) { return Eigen::Vector3d(p + Eigen::Vector3d(noise(rng), noise(rng), noise(rng))); };
+  front->name = "front", back->name = "back";
+  for (size_t i = 0; i < apples.size(); ++i) {
+    if (apples[i].y() < 2.6) front->clusters.push_back(Cluster(static_cast<int>(i), 1, {jitter(apples[i])}));
+    if (apples[i].y() > 2.4)
+      back->clusters.push_back(Cluster(static_cast<int>(i), 1, {back_to_front.inverse() * jitter(apples[i])}));
+  }
+}
+
+TEST(RegistrationTest, RecoversKnownTransforms) {
+  const std::vector<Eigen::Vector3d> apples = Canopy(150, 0, 5, 1);
+  for (const auto& [heading, along, across] : {std::tuple{0.0, 0.0, 5.0}, {2.5, 0.7, 5.3}, {-4.0, -1.2, 4.6}}) {
+    SideCloud front, back;
+    const Eigen::Isometry3d truth = BackToFrontTransform(heading, along, across);
+    Sides(apples, truth, 2, &front, &back);
+    const Registration r = RegisterSides(front, back, RegistrationOptions());
+    EXPECT_NEAR(r.heading_deg, heading, 0.3);
+    EXPECT_NEAR(r.along, along, 0.03);
+    EXPECT_NEAR(r.across, across, 0.03);
+    int shared = 0;
+    for (const auto& a : apples) shared += a.y() > 2.4 && a.y() < 2.6;
+    EXPECT_GE(r.matched, 0.9 * shared);
+    EXPECT_LE(r.matched, shared + 2);
+    EXPECT_LT(r.residual, 0.03);
+    EXPECT_GT(r.overlap, 4.5);
+    EXPECT_LT(r.chance_matched * 1.5, r.matched);
+  }
+}
+
+TEST(RegistrationTest, EvaluatesAGivenTransform) {
+  const std::vector<Eigen::Vector3d> apples = Canopy(100, 0, 4, 3);
+  SideCloud front, back;
+  const Eigen::Isometry3d truth = BackToFrontTransform(1.0, 0.3, 5.0);
+  Sides(apples, truth, 4, &front, &back);
+  const Registration r = EvaluateAlignment(front, back, truth, RegistrationOptions());
+  EXPECT_NEAR(r.heading_deg, 1.0, 1e-9);
+  EXPECT_NEAR(r.along, 0.3, 1e-9);
+  EXPECT_NEAR(r.across, 5.0, 1e-9);
+  EXPECT_GT(r.matched, 5);
+}
+
+TEST(RegistrationTest, FailsOnSidesOfDifferentRows) {
+  SideCloud front, back, other_front, other_back;
+  const Eigen::Isometry3d t = BackToFrontTransform(0, 0, 5);
+  Sides(Canopy(150, 0, 5, 11), t, 5, &front, &back);
+  Sides(Canopy(150, 0, 5, 12), t, 6, &other_front, &other_back);  // another row
+  try {
+    RegisterSides(front, other_back, RegistrationOptions());
+    FAIL() << "registered two different rows";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("same row"), std::string::npos) << e.what();
+  }
+}
+
+TEST(RegistrationTest, FailsWhenTheSidesCoverDifferentStretches) {
+  // The back side films 3..10 m of a row whose front side covers 0..5 m.
+  const std::vector<Eigen::Vector3d> apples = Canopy(220, 0, 10, 7);
+  SideCloud front, back;
+  Sides(apples, BackToFrontTransform(0, 0, 5), 8, &front, &back);
+  front.clusters.erase(std::remove_if(front.clusters.begin(), front.clusters.end(),
+                                      [](const SideCluster& c) { return c.centre.x() > 5; }),
+                       front.clusters.end());
+  const Eigen::Isometry3d to_front = BackToFrontTransform(0, 0, 5);
+  back.clusters.erase(std::remove_if(back.clusters.begin(), back.clusters.end(),
+                                     [&](const SideCluster& c) { return (to_front * c.centre).x() < 3; }),
+                      back.clusters.end());
+  try {
+    RegisterSides(front, back, RegistrationOptions());
+    FAIL() << "registered sides that overlap by 2 of 5 m";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("different stretches"), std::string::npos) << e.what();
+  }
+}
+
+TEST(RegistrationTest, FailsWithTooFewClusters) {
+  SideCloud front, back;
+  Sides(Canopy(6, 0, 2, 9), BackToFrontTransform(0, 0, 5), 10, &front, &back);
+  back.clusters.resize(2);
+  EXPECT_THROW(RegisterSides(front, back, RegistrationOptions()), Error);
+}
+
+TEST(SharedCountTest, InclusionExclusionOverIntersectingClusters) {
+  const Eigen::Vector3d a(0, 2.5, 1.5), b(1, 2.5, 1.5), far(3, 2.5, 1.5), dx(0.09, 0, 0), e(0.01, 0, 0);
+  const std::vector<SideCluster> front = {
+      Cluster(1, 1, {a}),                          // one apple, also seen from the back (C)
+      Cluster(2, 3, {b, b + dx, b + 2 * dx}),     // three apples; the back's D covers one... of its points
+      Cluster(3, 2, {far, far + dx}),              // front only
+  };
+  const std::vector<SideCluster> back = {
+      Cluster(1, 1, {a + e}),                             // C: the same apple as front 1
+      Cluster(2, 2, {b + 2 * dx + e, b + 3 * dx}),        // D: half of it inside front 2
+      Cluster(3, 1, {far + Eigen::Vector3d(0, 0, 0.5)}),  // back only
+  };
+  const SharedCount s = CountSharedApples(front, back, SharedCountOptions());
+  EXPECT_EQ(s.front, 6);
+  EXPECT_EQ(s.back, 4);
+  ASSERT_EQ(s.pairs.size(), 2u);
+  EXPECT_DOUBLE_EQ(s.pairs[0].weight, 1.0);   // C wholly in front 1
+  EXPECT_DOUBLE_EQ(s.pairs[0].shared, 1.0);
+  EXPECT_DOUBLE_EQ(s.pairs[1].weight, 0.5);   // the smaller cluster D: one of two points inside
+  EXPECT_DOUBLE_EQ(s.pairs[1].shared, 1.0);   // 0.5 * min(3, 2)
+  EXPECT_DOUBLE_EQ(s.shared, 2.0);
+  EXPECT_EQ(s.total, 8);                       // 6 + 4 - 2
+  EXPECT_DOUBLE_EQ(s.front_shared[0], 1.0);
+  EXPECT_DOUBLE_EQ(s.front_shared[2], 0.0);
+  EXPECT_DOUBLE_EQ(s.back_shared[1], 1.0);
+}
+
+TEST(SharedCountTest, ACLusterNeverSharesMoreThanItsCount) {
+  // One front apple inside two back clusters of one apple each.
+  const Eigen::Vector3d a(0, 2.5, 1.5), e(0.02, 0, 0);
+  const std::vector<SideCluster> front = {Cluster(1, 1, {a})};
+  const std::vector<SideCluster> back = {Cluster(1, 1, {a + e}), Cluster(2, 1, {a - e})};
+  const SharedCount s = CountSharedApples(front, back, SharedCountOptions());
+  EXPECT_DOUBLE_EQ(s.shared, 1.0);
+  EXPECT_EQ(s.total, 2);
+  // Apples farther apart than the intersection distance are not shared.
+  const std::vector<SideCluster> apart = {Cluster(1, 1, {a + Eigen::Vector3d(0.12, 0, 0)})};
+  EXPECT_EQ(CountSharedApples(front, apart, SharedCountOptions()).total, 2);
+  EXPECT_THROW(CountSharedApples(front, back, SharedCountOptions{-1}), Error);
+}
+
+TEST(SideCloudTest, MissingSideOutputsAreAClearError) {
+  try {
+    LoadSideCloud("/nonexistent/side", "front");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("side.json is missing"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SideCloudTest, RowFrameTransformMapsTheAxes) {
+  // A back side: across = -y, up = z, so along = across x up = -x.
+  const Eigen::Isometry3d t = RowFrameTransform({1, 5, 0}, {-1, 0, 0}, {0, -1, 0}, {0, 0, 1});
+  EXPECT_TRUE((t * Eigen::Vector3d(1, 5, 0)).isZero(1e-12));
+  EXPECT_TRUE((t * Eigen::Vector3d(0, 5, 2)).isApprox(Eigen::Vector3d(1, 0, 2)));
+  EXPECT_TRUE((t * Eigen::Vector3d(1, 3, 0)).isApprox(Eigen::Vector3d(0, 2, 0)));
+  EXPECT_THROW(RowFrameTransform({0, 0, 0}, {1, 0, 0}, {1, 0, 0}, {0, 0, 1}), Error);
+}
+
+}  // namespace
+}  // namespace orchard

@@ -1,0 +1,227 @@
+#include "orchard/merge/registration.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <unordered_map>
+
+#include "orchard/core/error.h"
+
+namespace orchard {
+
+void RegistrationOptions::Check() const {
+  ORCHARD_CHECK_OPTION(match_distance > 0, "match distance must be positive, got ", match_distance);
+  ORCHARD_CHECK_OPTION(max_heading_deg >= 0 && max_heading_deg < 90, "max heading must be in [0, 90), got ",
+                       max_heading_deg);
+  ORCHARD_CHECK_OPTION(heading_step_deg > 0, "heading step must be positive, got ", heading_step_deg);
+  ORCHARD_CHECK_OPTION(cell > 0, "Hough cell must be positive, got ", cell);
+  ORCHARD_CHECK_OPTION(min_path_distance >= 0 && max_path_distance > min_path_distance,
+                       "path distance range must be 0 <= min < max, got ", min_path_distance, "..", max_path_distance);
+  ORCHARD_CHECK_OPTION(min_matched >= 3, "min matched must be at least 3, got ", min_matched);
+  ORCHARD_CHECK_OPTION(min_distinctness >= 1, "min distinctness must be >= 1, got ", min_distinctness);
+  ORCHARD_CHECK_OPTION(min_overlap >= 0 && min_overlap <= 1, "min overlap must be in [0, 1], got ", min_overlap);
+  ORCHARD_CHECK_OPTION(refine_iterations >= 1, "refine iterations must be >= 1, got ", refine_iterations);
+}
+
+Eigen::Isometry3d BackToFrontTransform(double heading_deg, double along, double across) {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.linear() = Eigen::AngleAxisd(M_PI + heading_deg * M_PI / 180, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  t.translation() = Eigen::Vector3d(along, across, 0);
+  return t;
+}
+
+namespace {
+
+struct Candidate {
+  double heading_deg = 0;
+  Eigen::Vector2d offset = Eigen::Vector2d::Zero();
+  int votes = 0;
+};
+
+struct Fit {
+  double heading_deg = 0;
+  Eigen::Vector2d offset = Eigen::Vector2d::Zero();
+  std::vector<std::pair<int, int>> pairs;
+  double residual = 0;
+};
+
+// Mutual nearest neighbours within `distance` of the transformed back centres.
+std::vector<std::pair<int, int>> MatchCentres(const std::vector<Eigen::Vector3d>& front,
+                                              const std::vector<Eigen::Vector3d>& back_in_front, double distance) {
+  const int nf = static_cast<int>(front.size()), nb = static_cast<int>(back_in_front.size());
+  std::vector<int> best_f(nb, -1), best_b(nf, -1);
+  std::vector<double> dist_f(nb, distance), dist_b(nf, distance);
+  for (int b = 0; b < nb; ++b)
+    for (int f = 0; f < nf; ++f) {
+      const double d = (front[f] - back_in_front[b]).norm();
+      if (d < dist_f[b]) dist_f[b] = d, best_f[b] = f;
+      if (d < dist_b[f]) dist_b[f] = d, best_b[f] = b;
+    }
+  std::vector<std::pair<int, int>> pairs;
+  for (int b = 0; b < nb; ++b)
+    if (best_f[b] >= 0 && best_b[best_f[b]] == b) pairs.emplace_back(best_f[b], b);
+  return pairs;
+}
+
+// Closest points and a rigid fit in the ground plane, repeated.
+Fit Refine(const std::vector<Eigen::Vector3d>& front, const std::vector<Eigen::Vector3d>& back, const Candidate& start,
+           const RegistrationOptions& o) {
+  Fit fit;
+  fit.heading_deg = start.heading_deg;
+  fit.offset = start.offset;
+  for (int it = 0; it < o.refine_iterations; ++it) {
+    const Eigen::Isometry3d t = BackToFrontTransform(fit.heading_deg, fit.offset.x(), fit.offset.y());
+    std::vector<Eigen::Vector3d> moved;
+    for (const auto& b : back) moved.push_back(t * b);
+    auto pairs = MatchCentres(front, moved, o.match_distance);
+    if (pairs.size() < 3) {
+      fit.pairs = pairs;
+      break;
+    }
+    // 2D Procrustes: rotation about z and translation in x, y.
+    Eigen::Vector2d mf = Eigen::Vector2d::Zero(), mb = Eigen::Vector2d::Zero();
+    for (const auto& [f, b] : pairs) mf += front[f].head<2>(), mb += back[b].head<2>();
+    mf /= static_cast<double>(pairs.size()), mb /= static_cast<double>(pairs.size());
+    double s_dot = 0, s_cross = 0;
+    for (const auto& [f, b] : pairs) {
+      const Eigen::Vector2d p = back[b].head<2>() - mb, q = front[f].head<2>() - mf;
+      s_dot += p.dot(q), s_cross += p.x() * q.y() - p.y() * q.x();
+    }
+    double angle = std::atan2(s_cross, s_dot);  // full rotation, about pi
+    double heading = std::remainder(angle - M_PI, 2 * M_PI) * 180 / M_PI;
+    heading = std::clamp(heading, -o.max_heading_deg, o.max_heading_deg);
+    const Eigen::Rotation2Dd rot(M_PI + heading * M_PI / 180);
+    const Eigen::Vector2d offset = mf - rot * mb;
+    const bool converged = std::abs(heading - fit.heading_deg) < 1e-4 && (offset - fit.offset).norm() < 1e-5 &&
+                           pairs == fit.pairs;
+    fit.heading_deg = heading, fit.offset = offset, fit.pairs = std::move(pairs);
+    if (converged) break;
+  }
+  const Eigen::Isometry3d t = BackToFrontTransform(fit.heading_deg, fit.offset.x(), fit.offset.y());
+  std::vector<Eigen::Vector3d> moved;
+  for (const auto& b : back) moved.push_back(t * b);
+  fit.pairs = MatchCentres(front, moved, o.match_distance);
+  double sum = 0;
+  for (const auto& [f, b] : fit.pairs) sum += (front[f] - moved[b]).squaredNorm();
+  fit.residual = fit.pairs.empty() ? 0 : std::sqrt(sum / static_cast<double>(fit.pairs.size()));
+  return fit;
+}
+
+// Along-row extent (min, max x) of centres.
+std::pair<double, double> AlongExtent(const std::vector<Eigen::Vector3d>& centres) {
+  double lo = centres[0].x(), hi = lo;
+  for (const auto& c : centres) lo = std::min(lo, c.x()), hi = std::max(hi, c.x());
+  return {lo, hi};
+}
+
+}  // namespace
+
+Registration EvaluateAlignment(const SideCloud& front, const SideCloud& back, const Eigen::Isometry3d& t,
+                               const RegistrationOptions& o) {
+  Registration r;
+  r.back_to_front = t;
+  const Eigen::Matrix3d rot = t.linear();
+  r.heading_deg = std::remainder(std::atan2(rot(1, 0), rot(0, 0)) - M_PI, 2 * M_PI) * 180 / M_PI;
+  r.along = t.translation().x(), r.across = t.translation().y();
+  std::vector<Eigen::Vector3d> fc, moved;
+  for (const auto& c : front.clusters) fc.push_back(c.centre);
+  for (const auto& c : back.clusters) moved.push_back(t * c.centre);
+  if (fc.empty() || moved.empty()) return r;
+  r.pairs = MatchCentres(fc, moved, o.match_distance);
+  r.matched = static_cast<int>(r.pairs.size());
+  double sum = 0;
+  for (const auto& [f, b] : r.pairs) sum += (fc[f] - moved[b]).squaredNorm();
+  r.residual = r.pairs.empty() ? 0 : std::sqrt(sum / static_cast<double>(r.pairs.size()));
+  const auto [f0, f1] = AlongExtent(fc);
+  const auto [b0, b1] = AlongExtent(moved);
+  r.front_length = f1 - f0, r.back_length = b1 - b0;
+  r.overlap = std::max(0.0, std::min(f1, b1) - std::max(f0, b0));
+  return r;
+}
+
+Registration RegisterSides(const SideCloud& front, const SideCloud& back, const RegistrationOptions& o) {
+  o.Check();
+  for (const SideCloud* s : {&front, &back})
+    if (static_cast<int>(s->clusters.size()) < o.min_matched)
+      Fail("the ", s->name, " side has ", s->clusters.size(), " fruit clusters, too few to register the two sides (need ",
+           o.min_matched, ")");
+  std::vector<Eigen::Vector3d> fc, bc;
+  for (const auto& c : front.clusters) fc.push_back(c.centre);
+  for (const auto& c : back.clusters) bc.push_back(c.centre);
+
+  // Hough vote: every pair of clusters at a similar height proposes the
+  // offset that would put them on top of each other, for each heading.
+  std::vector<Candidate> peaks;  // the best cell of each heading and its neighbours
+  const int steps = static_cast<int>(std::floor(o.max_heading_deg / o.heading_step_deg + 1e-9));
+  for (int h = -steps; h <= steps; ++h) {
+    const double heading = h * o.heading_step_deg;
+    const Eigen::Rotation2Dd rot(M_PI + heading * M_PI / 180);
+    std::unordered_map<long long, int> votes;
+    auto key = [](long long ix, long long iy) {
+      return static_cast<long long>((static_cast<unsigned long long>(ix) << 32) | static_cast<std::uint32_t>(iy));
+    };
+    for (const auto& b : bc) {
+      const Eigen::Vector2d rb = rot * b.head<2>();
+      for (const auto& f : fc) {
+        if (std::abs(f.z() - b.z()) > o.match_distance) continue;
+        const Eigen::Vector2d t = f.head<2>() - rb;
+        if (t.y() < o.min_path_distance || t.y() > o.max_path_distance) continue;
+        ++votes[key(static_cast<long long>(std::floor(t.x() / o.cell)), static_cast<long long>(std::floor(t.y() / o.cell)))];
+      }
+    }
+    // Score of a cell: votes in it and its 8 neighbours (a match straddles cells).
+    std::vector<Candidate> cells;
+    for (const auto& [k, v] : votes) {
+      (void)v;
+      const long long ix = k >> 32, iy = static_cast<std::int32_t>(static_cast<std::uint32_t>(k & 0xffffffffLL));
+      int sum = 0;
+      for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy) {
+          const auto it = votes.find(key(ix + dx, iy + dy));
+          if (it != votes.end()) sum += it->second;
+        }
+      cells.push_back({heading, Eigen::Vector2d((ix + 0.5) * o.cell, (iy + 0.5) * o.cell), sum});
+    }
+    std::sort(cells.begin(), cells.end(), [](const Candidate& a, const Candidate& b) { return a.votes > b.votes; });
+    // Keep a few well-separated peaks per heading.
+    std::vector<Candidate> kept;
+    for (const auto& c : cells) {
+      bool near = false;
+      for (const auto& k : kept) near |= (k.offset - c.offset).norm() < 0.5;
+      if (!near) kept.push_back(c);
+      if (kept.size() >= 3) break;
+    }
+    peaks.insert(peaks.end(), kept.begin(), kept.end());
+  }
+  std::sort(peaks.begin(), peaks.end(), [](const Candidate& a, const Candidate& b) { return a.votes > b.votes; });
+  if (peaks.size() > 24) peaks.resize(24);
+
+  std::vector<Fit> fits;
+  for (const auto& p : peaks) fits.push_back(Refine(fc, bc, p, o));
+  auto better = [](const Fit& a, const Fit& b) {
+    return a.pairs.size() != b.pairs.size() ? a.pairs.size() > b.pairs.size() : a.residual < b.residual;
+  };
+  if (fits.empty())
+    Fail("no pair of fruit clusters from the two sides could be the same fruit: the sides do not show the same row");
+  const Fit best = *std::min_element(fits.begin(), fits.end(), better);
+  int chance = 0;
+  for (const auto& f : fits)
+    if ((f.offset - best.offset).norm() > 0.5 || std::abs(f.heading_deg - best.heading_deg) > 3)
+      chance = std::max(chance, static_cast<int>(f.pairs.size()));
+
+  Registration r = EvaluateAlignment(front, back, BackToFrontTransform(best.heading_deg, best.offset.x(), best.offset.y()), o);
+  r.chance_matched = chance;
+  if (r.matched < o.min_matched)
+    Fail("the two sides share no consistent fruit clusters (the best alignment matches ", r.matched, ", need ",
+         o.min_matched, "): they do not show the same row, or the reconstructions are broken");
+  if (r.matched < o.min_distinctness * std::max(chance, 1))
+    Fail("the two sides' alignment is ambiguous (", r.matched, " clusters matched at the best alignment, ", chance,
+         " at another): they may not show the same row");
+  const double shorter = std::min(r.front_length, r.back_length);
+  if (shorter <= 0 || r.overlap < o.min_overlap * shorter)
+    Fail("the two sides cover different stretches of the row: they overlap by ", r.overlap, " m along the row (front ",
+         r.front_length, " m, back ", r.back_length, " m)");
+  return r;
+}
+
+}  // namespace orchard

@@ -1,0 +1,75 @@
+// Registration of the two sides of a row. Their images share almost no
+// features (they show opposite faces of the canopy), so the alignment uses
+// the row's geometry instead, as the study does: each side is metric with its
+// ground plane at z = 0 and its row frame (x along, y across towards the row,
+// z up), which leaves the heading, the offset along the row and the distance
+// across it. Those three come from fruit clusters seen from both sides: a
+// Hough vote over heading and offset for every pair of clusters at a similar
+// height, then an iterative closest-point refinement on the matched centres.
+#pragma once
+
+#include <utility>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "orchard/merge/side_cloud.h"
+
+namespace orchard {
+
+struct RegistrationOptions {
+  // Cluster centres of the two sides closer than this (m) are taken as the
+  // same fruit: a few centimetres of reconstruction error on each side.
+  double match_distance = 0.08;
+  // Heading search (degrees) around the half turn that makes the sides face
+  // each other: camera paths within this angle of parallel.
+  double max_heading_deg = 8;
+  double heading_step_deg = 0.5;
+  // Hough cell of the offset vote (m).
+  double cell = 0.05;
+  // Plausible distance between the two camera paths (m): a row's width plus
+  // the two working distances, from a narrow hedge to a wide tree row.
+  double min_path_distance = 1.0;
+  double max_path_distance = 30;
+  // Fewest clusters matched across the sides for a registration.
+  int min_matched = 5;
+  // The best alignment must match this many times as many clusters as the
+  // best alignment elsewhere (more than 0.5 m or 3 degrees away): otherwise
+  // the match is chance (two unrelated rows also share a few coincidences).
+  double min_distinctness = 1.5;
+  // The sides must overlap along the row by this fraction of the shorter one.
+  double min_overlap = 0.5;
+  // Refinement rounds (closest points, then a rigid fit).
+  int refine_iterations = 20;
+  void Check() const;
+};
+
+struct Registration {
+  // back row frame -> front row frame: a half turn about up plus heading_deg,
+  // then (along, across) in the ground plane.
+  Eigen::Isometry3d back_to_front = Eigen::Isometry3d::Identity();
+  double heading_deg = 0;
+  double along = 0;   // offset along the row (m)
+  double across = 0;  // distance between the camera paths (m)
+  int matched = 0;         // clusters matched one to one
+  double residual = 0;     // RMS distance between matched centres (m)
+  int chance_matched = 0;  // best match count of any other alignment
+  double overlap = 0;      // along-row overlap of the two sides (m)
+  double front_length = 0, back_length = 0;  // along-row extents (m)
+  std::vector<std::pair<int, int>> pairs;    // matched (front, back) cluster indices
+};
+
+// The transform a (heading, along, across) triple stands for.
+Eigen::Isometry3d BackToFrontTransform(double heading_deg, double along, double across);
+
+// Matches, residual and along-row overlap of the sides under a given
+// back -> front transform (heading, along and across are read from it).
+Registration EvaluateAlignment(const SideCloud& front, const SideCloud& back, const Eigen::Isometry3d& back_to_front,
+                               const RegistrationOptions& options);
+
+// Throws orchard::Error with the reason when the sides cannot be registered:
+// too few clusters, no consistent alignment (different rows, unrelated
+// videos), or sides that cover different stretches of the row.
+Registration RegisterSides(const SideCloud& front, const SideCloud& back, const RegistrationOptions& options);
+
+}  // namespace orchard

@@ -1,0 +1,141 @@
+#include "orchard/merge/report.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+namespace orchard {
+namespace {
+
+std::string Escape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    if (c == '<') out += "&lt;";
+    else if (c == '>') out += "&gt;";
+    else if (c == '&') out += "&amp;";
+    else if (c == '"') out += "&quot;";
+    else out += c;
+  }
+  return out;
+}
+
+std::string Num(double v, int decimals = 1) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  return buf;
+}
+
+std::string Percent(double estimate, double truth) {
+  return truth > 0 ? Num(100.0 * estimate / truth) + "%" : "-";
+}
+
+// Apples along the row (x) and by height (y), and the per-metre bars below.
+std::string MapSvg(const nlohmann::json& y, const std::vector<MapCluster>& clusters) {
+  double x0 = 0, x1 = 1, h1 = 3;
+  if (!clusters.empty()) {
+    x0 = x1 = clusters[0].along;
+    for (const auto& c : clusters) x0 = std::min(x0, c.along), x1 = std::max(x1, c.along), h1 = std::max(h1, c.height);
+  }
+  for (const auto& b : y.at("per_metre")) x0 = std::min(x0, b.at("from").get<double>()), x1 = std::max(x1, b.at("to").get<double>());
+  const double width = 900, map_h = 300, bar_h = 120, pad = 40;
+  const double sx = (width - 2 * pad) / std::max(x1 - x0, 1e-6), sy = (map_h - 2 * pad) / h1;
+  std::ostringstream s;
+  s << "<svg xmlns='http://www.w3.org/2000/svg' width='" << width << "' height='" << map_h + bar_h + 30
+    << "' style='background:#fbfbf7;border:1px solid #ccc'>\n";
+  // Ground line and height ticks.
+  s << "<line x1='" << pad << "' y1='" << map_h - pad << "' x2='" << width - pad << "' y2='" << map_h - pad
+    << "' stroke='#7a5' stroke-width='2'/>\n";
+  for (int m = 0; m <= static_cast<int>(h1); ++m)
+    s << "<text x='4' y='" << map_h - pad - m * sy + 4 << "' font-size='11'>" << m << " m</text>\n";
+  for (const auto& c : clusters) {
+    const std::string colour = c.shared > 0 ? "#d22" : (c.side == "front" ? "#2a7" : "#27c");
+    s << "<circle cx='" << Num(pad + (c.along - x0) * sx) << "' cy='" << Num(map_h - pad - c.height * sy) << "' r='"
+      << Num(3 + 1.5 * std::sqrt(std::max(c.count, 0))) << "' fill='" << colour << "' fill-opacity='0.6'><title>"
+      << c.side << ": " << c.count << " apple(s)" << (c.shared > 0 ? ", " + Num(c.shared) + " seen from both sides" : "")
+      << "</title></circle>\n";
+  }
+  // Per-metre bars.
+  double most = 1;
+  for (const auto& b : y.at("per_metre")) most = std::max(most, b.at("count").get<double>());
+  const double base = map_h + bar_h;
+  for (const auto& b : y.at("per_metre")) {
+    const double from = b.at("from").get<double>(), to = b.at("to").get<double>(), n = b.at("count").get<double>();
+    const double h = (bar_h - 20) * n / most;
+    s << "<rect x='" << Num(pad + (from - x0) * sx + 1) << "' y='" << Num(base - h) << "' width='"
+      << Num(std::max((to - from) * sx - 2, 1.0)) << "' height='" << Num(h) << "' fill='#c84'/>\n";
+    s << "<text x='" << Num(pad + ((from + to) / 2 - x0) * sx - 8) << "' y='" << Num(base - h - 3)
+      << "' font-size='11'>" << Num(n, 0) << "</text>\n";
+    s << "<text x='" << Num(pad + (from - x0) * sx) << "' y='" << base + 14 << "' font-size='11'>" << Num(from)
+      << " m</text>\n";
+  }
+  s << "<text x='" << pad << "' y='14' font-size='12'>apples along the row (front side's frame): "
+       "<tspan fill='#2a7'>front</tspan>, <tspan fill='#27c'>back</tspan>, <tspan fill='#d22'>seen from both sides</tspan>; "
+       "bars: apples per bin</text>\n";
+  s << "</svg>\n";
+  return s.str();
+}
+
+}  // namespace
+
+std::string YieldReportHtml(const nlohmann::json& y, const std::vector<MapCluster>& clusters,
+                            const std::vector<std::string>& frames) {
+  std::ostringstream h;
+  h << "<!DOCTYPE html>\n<html><head><meta charset='utf-8'><title>orchard yield</title>\n"
+       "<style>body{font-family:sans-serif;max-width:960px;margin:2em auto;color:#222}"
+       "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #ccc;padding:4px 10px;text-align:right}"
+       "th{background:#eee}td:first-child{text-align:left}img{max-width:440px;margin:4px;border:1px solid #ccc}"
+       ".warn{color:#a40}</style></head><body>\n";
+  h << "<h1>Apple yield of the row: " << y.at("total").get<int>() << " apples</h1>\n";
+  h << "<p>Two videos, one from each side of the row, each reconstructed in 3D; fruit clusters counted once per side "
+       "from their best views; the sides aligned on the ground plane and their shared fruit; apples seen from both "
+       "sides counted once (inclusion-exclusion).</p>\n";
+  const auto& t = y.contains("truth") ? y.at("truth") : nlohmann::json();
+  h << "<h2>Counts</h2>\n<table><tr><th></th><th>apples</th>";
+  if (!t.is_null()) h << "<th>of harvested</th><th>of visible from either side</th>";
+  h << "</tr>\n";
+  auto row = [&](const std::string& name, double v) {
+    h << "<tr><td>" << Escape(name) << "</td><td>" << Num(v, 0) << "</td>";
+    if (!t.is_null())
+      h << "<td>" << Percent(v, t.value("harvested", 0.0)) << "</td><td>" << Percent(v, t.value("visible_any", 0.0))
+        << "</td>";
+    h << "</tr>\n";
+  };
+  row("estimate (both sides merged)", y.at("total").get<double>());
+  row("front side", y.at("front").get<double>());
+  row("back side", y.at("back").get<double>());
+  row("sum of the sides, not merged", y.at("sum_of_sides").get<double>());
+  row("seen from both sides (subtracted)", y.at("shared").get<double>());
+  if (!t.is_null()) {
+    row("truth: harvested", t.value("harvested", 0.0));
+    row("truth: visible from either side", t.value("visible_any", 0.0));
+    row("truth: visible from both sides", t.value("visible_both", 0.0));
+  }
+  h << "</table>\n";
+  for (const auto& w : y.at("warnings")) h << "<p class='warn'>Warning: " << Escape(w.get<std::string>()) << "</p>\n";
+  h << "<h2>Map</h2>\n" << MapSvg(y, clusters);
+  const auto& a = y.at("alignment");
+  h << "<h2>Alignment of the two sides</h2>\n<table>"
+    << "<tr><td>method</td><td>" << Escape(a.at("method").get<std::string>()) << "</td></tr>"
+    << "<tr><td>heading (beyond facing each other)</td><td>" << Num(a.at("heading_deg").get<double>(), 2) << "&deg;</td></tr>"
+    << "<tr><td>offset along the row</td><td>" << Num(a.at("along_m").get<double>(), 3) << " m</td></tr>"
+    << "<tr><td>distance between the camera paths</td><td>" << Num(a.at("across_m").get<double>(), 3) << " m</td></tr>"
+    << "<tr><td>clusters matched across the sides</td><td>" << a.at("matched").get<int>() << "</td></tr>"
+    << "<tr><td>residual (RMS distance of matched clusters)</td><td>" << Num(100 * a.at("residual_m").get<double>(), 1)
+    << " cm</td></tr>"
+    << "<tr><td>best match count of any other alignment</td><td>" << a.at("chance_matched").get<int>() << "</td></tr>"
+    << "<tr><td>overlap along the row</td><td>" << Num(a.at("overlap_m").get<double>(), 2) << " m</td></tr></table>\n";
+  if (!frames.empty()) {
+    h << "<h2>Sample frames</h2>\n<p>Each 3D cluster's region outlined with its count; grey: removed (fallen apples, "
+         "the next row, ...).</p>\n";
+    for (const auto& f : frames) h << "<a href='" << Escape(f) << "'><img src='" << Escape(f) << "' alt='" << Escape(f) << "'></a>\n";
+  }
+  h << "<h2>Timings</h2>\n<table><tr><th>stage</th><th>seconds</th></tr>\n";
+  for (const auto& [stage, seconds] : y.at("timings_s").items())
+    h << "<tr><td>" << Escape(stage) << "</td><td>" << Num(seconds.get<double>(), 1) << "</td></tr>\n";
+  h << "</table>\n<h2>Settings</h2>\n<pre>" << Escape(y.at("settings").dump(2)) << "</pre>\n";
+  h << "</body></html>\n";
+  return h.str();
+}
+
+}  // namespace orchard

@@ -1,0 +1,116 @@
+#include "orchard/merge/side_cloud.h"
+
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "orchard/core/error.h"
+#include "orchard/core/file_io.h"
+
+namespace orchard {
+
+void UpdateClusterExtent(SideCluster* c) {
+  if (c->points.empty()) return;
+  c->centre.setZero();
+  c->min = c->max = c->points[0];
+  for (const auto& p : c->points) {
+    c->centre += p;
+    c->min = c->min.cwiseMin(p), c->max = c->max.cwiseMax(p);
+  }
+  c->centre /= static_cast<double>(c->points.size());
+}
+
+Eigen::Isometry3d RowFrameTransform(const Eigen::Vector3d& origin, const Eigen::Vector3d& along,
+                                    const Eigen::Vector3d& across, const Eigen::Vector3d& up) {
+  Eigen::Matrix3d axes;
+  axes.col(0) = along.normalized(), axes.col(1) = across.normalized(), axes.col(2) = up.normalized();
+  if (std::abs(axes.determinant() - 1) > 1e-3) Fail("row frame axes are not a right-handed orthonormal basis");
+  Eigen::Isometry3d to_row = Eigen::Isometry3d::Identity();
+  to_row.linear() = axes.transpose();
+  to_row.translation() = -axes.transpose() * origin;
+  return to_row;
+}
+
+namespace {
+
+Eigen::Vector3d Vec3(const nlohmann::json& j) {
+  const auto v = j.get<std::vector<double>>();
+  if (v.size() != 3) Fail("expected three numbers, got ", v.size());
+  return {v[0], v[1], v[2]};
+}
+
+}  // namespace
+
+SideCloud LoadSideCloud(const fs::path& dir, const std::string& name) {
+  SideCloud cloud;
+  cloud.name = name;
+  const fs::path json_path = dir / "side.json", csv_path = dir / "clusters.csv", ply_path = dir / "fruit.ply";
+  for (const auto& p : {json_path, csv_path, ply_path})
+    if (!fs::is_regular_file(p)) Fail(name, " side: ", p.string(), " is missing (run `orchard side` first)");
+  try {
+    const nlohmann::json j = nlohmann::json::parse(ReadTextFile(json_path));
+    const auto& f = j.at("row_frame");
+    cloud.to_row = RowFrameTransform(Vec3(f.at("origin")), Vec3(f.at("along")), Vec3(f.at("across")), Vec3(f.at("up")));
+    cloud.count = j.at("count").get<int>();
+  } catch (const nlohmann::json::exception& e) {
+    Fail(name, " side: ", json_path.string(), " has no usable row_frame/count (made by an older version?): ", e.what());
+  }
+  // Kept clusters and their counts.
+  std::map<int, size_t> index;  // cluster id -> position in cloud.clusters
+  {
+    std::istringstream csv(ReadTextFile(csv_path));
+    std::string line;
+    std::getline(csv, line);
+    if (line.rfind("id,x,y,z,", 0) != 0) Fail(name, " side: ", csv_path.string(), " is not a side clusters.csv");
+    int row = 1;
+    while (std::getline(csv, line)) {
+      ++row;
+      std::vector<std::string> f;
+      std::stringstream ls(line);
+      std::string item;
+      while (std::getline(ls, item, ',')) f.push_back(item);
+      if (f.size() < 10) Fail(name, " side: ", csv_path.string(), " line ", row, " has ", f.size(), " fields");
+      if (f[9] != "kept") continue;
+      SideCluster c;
+      try {
+        c.id = std::stoi(f[0]);
+        c.count = std::stoi(f[8]);
+      } catch (const std::exception&) {
+        Fail(name, " side: ", csv_path.string(), " line ", row, ": bad id or count");
+      }
+      index[c.id] = cloud.clusters.size();
+      cloud.clusters.push_back(c);
+    }
+  }
+  // Fruit points (ascii PLY written by RunSide: x y z r g b cluster).
+  {
+    std::ifstream ply(ply_path);
+    std::string line;
+    bool header = true;
+    int line_no = 0;
+    while (std::getline(ply, line)) {
+      ++line_no;
+      if (header) {
+        if (line == "end_header") header = false;
+        continue;
+      }
+      std::istringstream ls(line);
+      Eigen::Vector3d p;
+      int r, g, b, id;
+      if (!(ls >> p.x() >> p.y() >> p.z() >> r >> g >> b >> id))
+        Fail(name, " side: ", ply_path.string(), " line ", line_no, " is not 'x y z r g b cluster'");
+      const auto it = index.find(id);
+      if (it != index.end()) cloud.clusters[it->second].points.push_back(cloud.to_row * p);
+    }
+    if (header) Fail(name, " side: ", ply_path.string(), " has no PLY header");
+  }
+  for (auto& c : cloud.clusters) {
+    if (c.points.empty()) Fail(name, " side: cluster ", c.id, " of ", csv_path.string(), " has no points in ", ply_path.string());
+    UpdateClusterExtent(&c);
+  }
+  return cloud;
+}
+
+}  // namespace orchard

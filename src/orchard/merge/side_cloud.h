@@ -1,0 +1,46 @@
+// One side's kept fruit clusters in its row frame (x along the camera path,
+// y across towards the row, z up from the ground, metres), read back from an
+// `orchard side` output folder: the merge's only input from the side stage.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+namespace orchard {
+
+namespace fs = std::filesystem;
+
+struct SideCluster {
+  int id = 0;      // the id in the side's clusters.csv
+  int count = 0;   // apples (median of the best views)
+  std::vector<Eigen::Vector3d> points;  // fruit points, row frame
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  Eigen::Vector3d min = Eigen::Vector3d::Zero(), max = Eigen::Vector3d::Zero();
+};
+
+struct SideCloud {
+  std::string name;  // "front" / "back"
+  // Poses' frame -> row frame.
+  Eigen::Isometry3d to_row = Eigen::Isometry3d::Identity();
+  std::vector<SideCluster> clusters;  // kept clusters only
+  int count = 0;                      // the side's count (sum over kept clusters)
+};
+
+// Fills centre, min and max from the points.
+void UpdateClusterExtent(SideCluster* cluster);
+
+// The row frame as a transform from origin and axes (columns of the rotation
+// are along, across, up).
+Eigen::Isometry3d RowFrameTransform(const Eigen::Vector3d& origin, const Eigen::Vector3d& along,
+                                    const Eigen::Vector3d& across, const Eigen::Vector3d& up);
+
+// Reads side.json (row_frame, count), clusters.csv (kept clusters and their
+// counts) and fruit.ply (points with cluster ids) of `side_dir`. Throws
+// orchard::Error naming the file when one is missing or malformed.
+SideCloud LoadSideCloud(const fs::path& side_dir, const std::string& name);
+
+}  // namespace orchard

@@ -1,0 +1,261 @@
+#include "orchard/merge/yield.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
+
+#include "orchard/core/error.h"
+#include "orchard/core/file_io.h"
+#include "orchard/core/frame_source.h"
+#include "orchard/merge/report.h"
+#include "orchard/merge/side_cloud.h"
+
+namespace orchard {
+
+using Json = nlohmann::json;
+
+void YieldOptions::Check() const {
+  side.Check();
+  registration.Check();
+  shared.Check();
+  ORCHARD_CHECK_OPTION(bin_length > 0, "bin length must be positive, got ", bin_length);
+  ORCHARD_CHECK_OPTION(report_frames >= 0, "report frames must be >= 0, got ", report_frames);
+}
+
+namespace {
+
+double Seconds(std::chrono::steady_clock::time_point* clock) {
+  const auto now = std::chrono::steady_clock::now();
+  const double s = std::chrono::duration<double>(now - *clock).count();
+  *clock = now;
+  return s;
+}
+
+Json SideJson(const SideSummary& s, const SideCloud& cloud) {
+  return {{"count", s.count},
+          {"single_frame_sum", s.single_frame_sum},
+          {"frames_used", s.frames_used},
+          {"clusters_kept", s.clusters_kept},
+          {"clusters_removed", s.clusters_removed},
+          {"clusters_loaded", cloud.clusters.size()}};
+}
+
+Json AlignmentJson(const Registration& r, const std::string& method) {
+  return {{"method", method},
+          {"heading_deg", r.heading_deg},
+          {"along_m", r.along},
+          {"across_m", r.across},
+          {"matched", r.matched},
+          {"residual_m", r.residual},
+          {"chance_matched", r.chance_matched},
+          {"overlap_m", r.overlap},
+          {"front_length_m", r.front_length},
+          {"back_length_m", r.back_length}};
+}
+
+// Annotated frames written by the side, evenly spread (paths relative to out).
+std::vector<std::string> SampleFrames(const fs::path& out, const std::string& side, int n) {
+  std::vector<std::string> picked;
+  const fs::path dir = out / side / "annotated";
+  if (n <= 0 || !fs::is_directory(dir)) return picked;
+  const std::vector<fs::path> all = ListImages(dir);
+  if (all.empty()) return picked;
+  for (int i = 0; i < n && i < static_cast<int>(all.size()); ++i) {
+    const size_t k = all.size() * (2 * i + 1) / (2 * n);
+    picked.push_back(side + "/annotated/" + all[std::min(k, all.size() - 1)].filename().string());
+  }
+  return picked;
+}
+
+}  // namespace
+
+YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
+  o.Check();
+  if (in.out.empty()) Fail("no output folder");
+  if (o.poses_registered && (in.front.poses.empty() || in.back.poses.empty()))
+    Fail("--poses-registered needs given poses for both sides (--poses-front and --poses-back)");
+  if (!in.truth.empty() && !fs::is_regular_file(in.truth)) Fail("truth file ", in.truth.string(), " does not exist");
+  fs::create_directories(in.out);
+  auto clock = std::chrono::steady_clock::now();
+  Json timings = Json::object();
+  YieldSummary y;
+
+  // 1-2: each side in 3D (resumes from its caches in OUT/<side>/).
+  SideInputs front = in.front, back = in.back;
+  front.out = in.out / "front", back.out = in.out / "back";
+  spdlog::info("[yield 1/4] front side: frames, poses, fruit, 3D clusters -> {}", front.out.string());
+  y.front_side = RunSide(front, o.side);
+  timings["front side"] = Seconds(&clock);
+  spdlog::info("[yield 2/4] back side -> {}", back.out.string());
+  y.back_side = RunSide(back, o.side);
+  timings["back side"] = Seconds(&clock);
+  for (const auto& [name, s] : {std::pair<std::string, const SideSummary*>{"front", &y.front_side}, {"back", &y.back_side}}) {
+    timings[name + ": poses"] = s->poses_s;
+    timings[name + ": detection and counting"] = s->fruit_s;
+    timings[name + ": 3D clusters"] = s->clusters_s;
+  }
+
+  // 3: registration.
+  spdlog::info("[yield 3/4] registering the two sides");
+  const SideCloud front_cloud = LoadSideCloud(front.out, "front");
+  const SideCloud back_cloud = LoadSideCloud(back.out, "back");
+  std::string method;
+  Json given_check;
+  // The transform the given poses imply when both are in one frame.
+  const Eigen::Isometry3d given = front_cloud.to_row * back_cloud.to_row.inverse();
+  if (o.poses_registered) {
+    y.registration = EvaluateAlignment(front_cloud, back_cloud, given, o.registration);
+    method = "given poses in one frame";
+  } else {
+    y.registration = RegisterSides(front_cloud, back_cloud, o.registration);
+    method = "fruit clusters seen from both sides (Hough vote + closest points)";
+    if (!in.front.poses.empty() && !in.back.poses.empty()) {
+      // Both sides came with poses: if they share a frame (the generator's
+      // true poses, RTK-GNSS), this is the registration's error.
+      const Registration g = EvaluateAlignment(front_cloud, back_cloud, given, o.registration);
+      given_check = {{"heading_deg", y.registration.heading_deg - g.heading_deg},
+                     {"along_m", y.registration.along - g.along},
+                     {"across_m", y.registration.across - g.across},
+                     {"note", "solved minus the transform implied by the given poses (meaningful when they share a frame)"}};
+    }
+  }
+  timings["registration"] = Seconds(&clock);
+  spdlog::info("aligned: heading {:.2f} deg, along {:.3f} m, across {:.3f} m, {} clusters matched, residual {:.1f} cm",
+               y.registration.heading_deg, y.registration.along, y.registration.across, y.registration.matched,
+               100 * y.registration.residual);
+
+  // 4: shared apples once, outputs.
+  spdlog::info("[yield 4/4] counting shared apples once, writing outputs");
+  std::vector<SideCluster> back_in_front = back_cloud.clusters;
+  for (auto& c : back_in_front) {
+    for (auto& p : c.points) p = y.registration.back_to_front * p;
+    UpdateClusterExtent(&c);
+  }
+  const SharedCount shared = CountSharedApples(front_cloud.clusters, back_in_front, o.shared);
+  y.front = shared.front, y.back = shared.back, y.shared = shared.shared, y.total = shared.total;
+  y.sum_of_sides = shared.front + shared.back;
+
+  // Per-metre map: each cluster's count minus half of what it shares.
+  std::vector<MapCluster> map;
+  for (size_t i = 0; i < front_cloud.clusters.size(); ++i) {
+    const auto& c = front_cloud.clusters[i];
+    map.push_back({"front", c.centre.x(), c.centre.z(), c.count, shared.front_shared[i]});
+  }
+  for (size_t i = 0; i < back_in_front.size(); ++i) {
+    const auto& c = back_in_front[i];
+    map.push_back({"back", c.centre.x(), c.centre.z(), c.count, shared.back_shared[i]});
+  }
+  Json per_metre = Json::array();
+  if (!map.empty()) {
+    double x0 = map[0].along, x1 = x0;
+    for (const auto& m : map) x0 = std::min(x0, m.along), x1 = std::max(x1, m.along);
+    x0 = std::floor(x0 / o.bin_length) * o.bin_length;
+    const int bins = std::max(1, static_cast<int>(std::ceil((x1 - x0) / o.bin_length + 1e-9)));
+    std::vector<double> sum(bins, 0);
+    for (const auto& m : map)
+      sum[std::min(bins - 1, static_cast<int>((m.along - x0) / o.bin_length))] += m.count - 0.5 * m.shared;
+    for (int b = 0; b < bins; ++b)
+      per_metre.push_back({{"from", x0 + b * o.bin_length}, {"to", x0 + (b + 1) * o.bin_length},
+                           {"count", std::round(sum[b] * 10) / 10}});
+  }
+
+  Json warnings = Json::array();
+  for (const auto* s : {&front, &back}) {
+    const Json side = Json::parse(ReadTextFile(s->out / "side.json"), nullptr, false);
+    if (!side.is_discarded() && side.contains("warnings"))
+      for (const auto& w : side.at("warnings")) warnings.push_back((s == &front ? "front: " : "back: ") + w.get<std::string>());
+  }
+  if (o.poses_registered && y.registration.matched < o.registration.min_matched)
+    warnings.push_back("the given poses match only " + std::to_string(y.registration.matched) +
+                       " clusters across the sides: are they really in one frame?");
+
+  timings["merge"] = Seconds(&clock);
+  Json j = {
+      {"total", y.total},
+      {"front", y.front},
+      {"back", y.back},
+      {"sum_of_sides", y.sum_of_sides},
+      {"shared", std::round(y.shared * 10) / 10},
+      {"per_metre", per_metre},
+      {"bin_length_m", o.bin_length},
+      {"alignment", AlignmentJson(y.registration, method)},
+      {"sides", {{"front", SideJson(y.front_side, front_cloud)}, {"back", SideJson(y.back_side, back_cloud)}}},
+      {"warnings", warnings},
+      {"version", ORCHARD_VERSION},
+  };
+  if (!given_check.is_null()) j["alignment"]["minus_given_poses"] = given_check;
+  j["settings"] = {
+      {"front", in.front.input.string()},
+      {"back", in.back.input.string()},
+      {"detector", in.front.detector_name},
+      {"counter", in.front.counter_name},
+      {"poses_front", in.front.poses.empty() ? "colmap" : in.front.poses.string()},
+      {"poses_back", in.back.poses.empty() ? "colmap" : in.back.poses.string()},
+      {"poses_registered", o.poses_registered},
+      {"camera_height_m", o.side.camera_height},
+      {"link_distance_m", o.side.clusters.link_distance},
+      {"match_distance_m", o.registration.match_distance},
+      {"intersection_distance_m", o.shared.intersection_distance},
+  };
+  if (!in.truth.empty()) {
+    const Json t = Json::parse(ReadTextFile(in.truth), nullptr, false);
+    if (t.is_discarded() || !t.contains("harvested")) Fail("truth file ", in.truth.string(), " has no \"harvested\" count");
+    Json truth = {{"file", in.truth.string()}};
+    for (const char* k : {"harvested", "visible_any", "visible_both", "visible_front", "visible_back"})
+      if (t.contains(k)) truth[k] = t.at(k);
+    const double harvested = t.at("harvested").get<double>(), visible = t.value("visible_any", 0.0);
+    if (harvested > 0) truth["total_percent_of_harvested"] = 100.0 * y.total / harvested;
+    if (visible > 0) {
+      truth["total_percent_of_visible_any"] = 100.0 * y.total / visible;
+      truth["sum_of_sides_percent_of_visible_any"] = 100.0 * y.sum_of_sides / visible;
+    }
+    j["truth"] = truth;
+  }
+
+  // clusters.csv and row.ply, both in the front side's row frame.
+  std::ostringstream csv, ply;
+  csv << "side,id,x,y,z,count,shared,points\n";
+  csv.precision(4);
+  csv << std::fixed;
+  size_t num_points = 0;
+  for (const auto& c : front_cloud.clusters) num_points += c.points.size();
+  for (const auto& c : back_in_front) num_points += c.points.size();
+  ply << "ply\nformat ascii 1.0\ncomment orchard yield: both sides in the front side's row frame (x along, y across, "
+         "z up, m); red = seen from both sides\nelement vertex "
+      << num_points
+      << "\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\nproperty uchar green\n"
+         "property uchar blue\nproperty uchar side\nproperty int cluster\nproperty float shared\nend_header\n";
+  auto write_side = [&](const std::vector<SideCluster>& clusters, const std::vector<double>& shared_of, int side) {
+    for (size_t i = 0; i < clusters.size(); ++i) {
+      const auto& c = clusters[i];
+      csv << (side == 0 ? "front" : "back") << ',' << c.id << ',' << c.centre.x() << ',' << c.centre.y() << ','
+          << c.centre.z() << ',' << c.count << ',' << shared_of[i] << ',' << c.points.size() << '\n';
+      const int r = shared_of[i] > 0 ? 220 : 30, g = shared_of[i] > 0 ? 30 : (side == 0 ? 170 : 110),
+                b = shared_of[i] > 0 ? 30 : (side == 0 ? 110 : 220);
+      for (const auto& p : c.points)
+        ply << p.x() << ' ' << p.y() << ' ' << p.z() << ' ' << r << ' ' << g << ' ' << b << ' ' << side << ' ' << c.id
+            << ' ' << shared_of[i] << '\n';
+    }
+  };
+  write_side(front_cloud.clusters, shared.front_shared, 0);
+  write_side(back_in_front, shared.back_shared, 1);
+  WriteTextFileAtomic(in.out / "clusters.csv", csv.str());
+  WriteTextFileAtomic(in.out / "row.ply", ply.str());
+  timings["outputs"] = Seconds(&clock);
+  j["timings_s"] = timings;
+  std::vector<std::string> frames = SampleFrames(in.out, "front", o.report_frames);
+  for (const auto& f : SampleFrames(in.out, "back", o.report_frames)) frames.push_back(f);
+  WriteTextFileAtomic(in.out / "report.html", YieldReportHtml(j, map, frames));
+  // yield.json last: its presence means the run completed.
+  WriteTextFileAtomic(in.out / "yield.json", j.dump(2) + "\n");
+  spdlog::info("row: {} apples (front {}, back {}, shared {:.1f}; sum of sides {})", y.total, y.front, y.back,
+               y.shared, y.sum_of_sides);
+  return y;
+}
+
+}  // namespace orchard

@@ -1,0 +1,55 @@
+// The whole row: both sides counted in 3D (fruitmap/side.h), registered
+// (registration.h), apples seen from both sides counted once
+// (shared_count.h), and the row's outputs: yield.json, clusters.csv, row.ply
+// and report.html. `orchard yield` and `orchard demo` run it.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+#include "orchard/fruitmap/side.h"
+#include "orchard/merge/registration.h"
+#include "orchard/merge/shared_count.h"
+
+namespace orchard {
+
+namespace fs = std::filesystem;
+
+struct YieldOptions {
+  SideOptions side;
+  RegistrationOptions registration;
+  SharedCountOptions shared;
+  // Length (m) of the along-row bins of the yield map.
+  double bin_length = 1.0;
+  // Take the given poses of both sides as one frame (RTK-GNSS, a SLAM run
+  // over both sides, the generator's true poses) instead of registering the
+  // sides from their fruit. Needs given poses for both sides.
+  bool poses_registered = false;
+  // Annotated sample frames per side shown in the report.
+  int report_frames = 2;
+  void Check() const;
+};
+
+struct YieldInputs {
+  SideInputs front, back;  // their `out` is ignored: the sides go to OUT/front and OUT/back
+  fs::path out;
+  // Optional ground truth (the generator's truth.json): compared in
+  // yield.json and the report.
+  fs::path truth;
+};
+
+struct YieldSummary {
+  int total = 0;         // the row's estimate: shared apples counted once
+  int front = 0, back = 0;
+  int sum_of_sides = 0;  // front + back, unmerged
+  double shared = 0;     // apples seen from both sides
+  SideSummary front_side, back_side;
+  Registration registration;
+};
+
+// Runs both sides (resuming from their caches), registers and merges them,
+// and writes the outputs atomically into inputs.out. Throws orchard::Error
+// with the reason on bad input or when the sides cannot be merged.
+YieldSummary RunYield(const YieldInputs& inputs, const YieldOptions& options);
+
+}  // namespace orchard
