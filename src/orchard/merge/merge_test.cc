@@ -128,37 +128,47 @@ TEST(SharedCountTest, InclusionExclusionOverIntersectingClusters) {
   const Eigen::Vector3d a(0, 2.5, 1.5), b(1, 2.5, 1.5), far(3, 2.5, 1.5), dx(0.09, 0, 0), e(0.01, 0, 0);
   const std::vector<SideCluster> front = {
       Cluster(1, 1, {a}),                          // one apple, also seen from the back (C)
-      Cluster(2, 3, {b, b + dx, b + 2 * dx}),     // three apples; the back's D covers one... of its points
+      Cluster(2, 3, {b, b + dx, b + 2 * dx}),     // three apples, two of them also in the back's D
       Cluster(3, 2, {far, far + dx}),              // front only
   };
   const std::vector<SideCluster> back = {
       Cluster(1, 1, {a + e}),                             // C: the same apple as front 1
-      Cluster(2, 2, {b + 2 * dx + e, b + 3 * dx}),        // D: half of it inside front 2
+      Cluster(2, 2, {b + 2 * dx + e, b + 3 * dx}),        // D: meets front 2 at one point
       Cluster(3, 1, {far + Eigen::Vector3d(0, 0, 0.5)}),  // back only
   };
   const SharedCount s = CountSharedApples(front, back, SharedCountOptions());
   EXPECT_EQ(s.front, 6);
   EXPECT_EQ(s.back, 4);
-  ASSERT_EQ(s.pairs.size(), 2u);
-  EXPECT_DOUBLE_EQ(s.pairs[0].weight, 1.0);   // C wholly in front 1
-  EXPECT_DOUBLE_EQ(s.pairs[0].shared, 1.0);
-  EXPECT_DOUBLE_EQ(s.pairs[1].weight, 0.5);   // the smaller cluster D: one of two points inside
-  EXPECT_DOUBLE_EQ(s.pairs[1].shared, 1.0);   // 0.5 * min(3, 2)
-  EXPECT_DOUBLE_EQ(s.shared, 2.0);
-  EXPECT_EQ(s.total, 8);                       // 6 + 4 - 2
+  ASSERT_EQ(s.links.size(), 2u);
+  EXPECT_DOUBLE_EQ(s.links[0].back_fraction, 1.0);  // C wholly near front 1
+  EXPECT_DOUBLE_EQ(s.links[1].front_fraction, 1.0 / 3);
+  EXPECT_DOUBLE_EQ(s.links[1].back_fraction, 0.5);
+  ASSERT_EQ(s.groups.size(), 2u);
+  EXPECT_DOUBLE_EQ(s.shared, 3.0);  // min(1, 1) + min(3, 2)
+  EXPECT_EQ(s.total, 7);            // 6 + 4 - 3
   EXPECT_DOUBLE_EQ(s.front_shared[0], 1.0);
+  EXPECT_DOUBLE_EQ(s.front_shared[1], 2.0);
   EXPECT_DOUBLE_EQ(s.front_shared[2], 0.0);
-  EXPECT_DOUBLE_EQ(s.back_shared[1], 1.0);
+  EXPECT_DOUBLE_EQ(s.back_shared[1], 2.0);
+  EXPECT_DOUBLE_EQ(s.back_shared[2], 0.0);
 }
 
-TEST(SharedCountTest, ACLusterNeverSharesMoreThanItsCount) {
-  // One front apple inside two back clusters of one apple each.
+TEST(SharedCountTest, LinkedClustersShareTheSmallerSidesApples) {
+  // One front apple near two back clusters of one apple each (one of them
+  // a duplicate): the group holds max(1, 2) = 2 apples.
   const Eigen::Vector3d a(0, 2.5, 1.5), e(0.02, 0, 0);
   const std::vector<SideCluster> front = {Cluster(1, 1, {a})};
   const std::vector<SideCluster> back = {Cluster(1, 1, {a + e}), Cluster(2, 1, {a - e})};
   const SharedCount s = CountSharedApples(front, back, SharedCountOptions());
   EXPECT_DOUBLE_EQ(s.shared, 1.0);
   EXPECT_EQ(s.total, 2);
+  EXPECT_DOUBLE_EQ(s.back_shared[0], 0.5);
+  // A chain links clusters through each other: front 1 - back 1 - front 2.
+  const std::vector<SideCluster> chain_front = {Cluster(1, 2, {a}), Cluster(2, 1, {a + 3 * e})};
+  const std::vector<SideCluster> chain_back = {Cluster(1, 2, {a + 1.5 * e})};
+  const SharedCount c = CountSharedApples(chain_front, chain_back, SharedCountOptions());
+  ASSERT_EQ(c.groups.size(), 1u);
+  EXPECT_EQ(c.total, 3);  // 3 + 2 - min(3, 2)
   // Apples farther apart than the intersection distance are not shared.
   const std::vector<SideCluster> apart = {Cluster(1, 1, {a + Eigen::Vector3d(0.12, 0, 0)})};
   EXPECT_EQ(CountSharedApples(front, apart, SharedCountOptions()).total, 2);

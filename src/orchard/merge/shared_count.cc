@@ -1,7 +1,8 @@
 #include "orchard/merge/shared_count.h"
 
 #include <algorithm>
-#include <cmath>
+#include <map>
+#include <numeric>
 
 #include "orchard/core/error.h"
 
@@ -32,14 +33,9 @@ bool BoxesMeet(const SideCluster& a, const SideCluster& b, double margin) {
   return true;
 }
 
-// Scales down the pairs of clusters whose shared apples exceed their count.
-void CapShared(const std::vector<SideCluster>& clusters, bool front_side, std::vector<SharedPair>* pairs) {
-  std::vector<double> sum(clusters.size(), 0);
-  for (const auto& p : *pairs) sum[front_side ? p.front : p.back] += p.shared;
-  for (auto& p : *pairs) {
-    const int i = front_side ? p.front : p.back;
-    if (sum[i] > clusters[i].count) p.shared *= clusters[i].count / sum[i];
-  }
+int Find(std::vector<int>& parent, int i) {
+  while (parent[i] != i) i = parent[i] = parent[parent[i]];
+  return i;
 }
 
 }  // namespace
@@ -50,33 +46,39 @@ SharedCount CountSharedApples(const std::vector<SideCluster>& front, const std::
   SharedCount r;
   for (const auto& c : front) r.front += c.count;
   for (const auto& c : back) r.back += c.count;
+  const int nf = static_cast<int>(front.size()), nb = static_cast<int>(back.size());
   const double d = o.intersection_distance;
-  for (size_t f = 0; f < front.size(); ++f)
-    for (size_t b = 0; b < back.size(); ++b) {
+  std::vector<int> parent(nf + nb);
+  std::iota(parent.begin(), parent.end(), 0);
+  for (int f = 0; f < nf; ++f)
+    for (int b = 0; b < nb; ++b) {
       if (!BoxesMeet(front[f], back[b], d)) continue;
-      const double in_f = FractionNear(front[f], back[b], d), in_b = FractionNear(back[b], front[f], d);
-      // The smaller cluster's share of the intersection: a single apple seen
-      // from both sides is wholly inside a larger cluster on the other side.
-      const SideCluster& fc = front[f];
-      const SideCluster& bc = back[b];
-      double weight;
-      if (fc.count != bc.count)
-        weight = fc.count < bc.count ? in_f : in_b;
-      else
-        weight = 0.5 * (in_f + in_b);
-      if (weight <= 0) continue;
-      r.pairs.push_back({static_cast<int>(f), static_cast<int>(b), weight, weight * std::min(fc.count, bc.count)});
+      const double in_f = FractionNear(front[f], back[b], d);
+      if (in_f <= 0) continue;
+      r.links.push_back({f, b, in_f, FractionNear(back[b], front[f], d)});
+      parent[Find(parent, f)] = Find(parent, nf + b);
     }
-  CapShared(front, true, &r.pairs);
-  CapShared(back, false, &r.pairs);
-  r.front_shared.assign(front.size(), 0);
-  r.back_shared.assign(back.size(), 0);
-  for (const auto& p : r.pairs) {
-    r.shared += p.shared;
-    r.front_shared[p.front] += p.shared;
-    r.back_shared[p.back] += p.shared;
+  std::map<int, SharedGroup> groups;
+  for (int i = 0; i < nf + nb; ++i) {
+    SharedGroup& g = groups[Find(parent, i)];
+    if (i < nf)
+      g.front.push_back(i), g.front_count += front[i].count;
+    else
+      g.back.push_back(i - nf), g.back_count += back[i - nf].count;
   }
-  r.total = static_cast<int>(std::lround(r.front + r.back - r.shared));
+  r.front_shared.assign(nf, 0);
+  r.back_shared.assign(nb, 0);
+  for (auto& [root, g] : groups) {
+    if (g.front.empty() || g.back.empty()) continue;
+    g.shared = std::min(g.front_count, g.back_count);
+    r.shared += g.shared;
+    for (int f : g.front)
+      if (g.front_count > 0) r.front_shared[f] = g.shared * static_cast<double>(front[f].count) / g.front_count;
+    for (int b : g.back)
+      if (g.back_count > 0) r.back_shared[b] = g.shared * static_cast<double>(back[b].count) / g.back_count;
+    r.groups.push_back(g);
+  }
+  r.total = r.front + r.back - static_cast<int>(r.shared);
   return r;
 }
 
