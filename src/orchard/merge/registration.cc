@@ -18,6 +18,8 @@ void RegistrationOptions::Check() const {
   ORCHARD_CHECK_OPTION(min_path_distance >= 0 && max_path_distance > min_path_distance,
                        "path distance range must be 0 <= min < max, got ", min_path_distance, "..", max_path_distance);
   ORCHARD_CHECK_OPTION(min_matched >= 3, "min matched must be at least 3, got ", min_matched);
+  ORCHARD_CHECK_OPTION(min_matched_fraction >= 0 && min_matched_fraction <= 1,
+                       "min matched fraction must be in [0, 1], got ", min_matched_fraction);
   ORCHARD_CHECK_OPTION(min_distinctness >= 1, "min distinctness must be >= 1, got ", min_distinctness);
   ORCHARD_CHECK_OPTION(min_overlap >= 0 && min_overlap <= 1, "min overlap must be in [0, 1], got ", min_overlap);
   ORCHARD_CHECK_OPTION(refine_iterations >= 1, "refine iterations must be >= 1, got ", refine_iterations);
@@ -214,6 +216,11 @@ Registration RegisterSides(const SideCloud& front, const SideCloud& back, const 
   if (r.matched < o.min_matched)
     Fail("the two sides share no consistent fruit clusters (the best alignment matches ", r.matched, ", need ",
          o.min_matched, "): they do not show the same row, or the reconstructions are broken");
+  const size_t fewer = std::min(front.clusters.size(), back.clusters.size());
+  if (r.matched < o.min_matched_fraction * static_cast<double>(fewer))
+    Fail("the two sides share too few fruit clusters (", r.matched, " of the ", fewer,
+         " on the side with fewer): they do not show the same row, or the detections are too sparse to register "
+         "them (give poses in one frame with --poses-registered)");
   if (r.matched < o.min_distinctness * std::max(chance, 1))
     Fail("the two sides' alignment is ambiguous (", r.matched, " clusters matched at the best alignment, ", chance,
          " at another): they may not show the same row");

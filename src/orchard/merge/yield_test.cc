@@ -16,22 +16,25 @@ namespace {
 
 class YieldTest : public ::testing::Test {
  protected:
-  static void SetUpTestSuite() {
-    dir_ = new fs::path(test::FreshTempDir("yield_test"));
-    for (const auto& [seed, name] : {std::pair{5, "row"}, {6, "other"}}) {
-      synth::SynthOptions o;
-      o.seed = seed;
-      o.scene.num_trees = 2;  // one tree is too short a row to tell it from the next row
-      o.patch_every = 0;
-      o.progress = false;
-      synth::RunSynth(o, *dir_ / name);
-    }
-  }
+  static void SetUpTestSuite() { dir_ = new fs::path(test::FreshTempDir("yield_test")); }
   static void TearDownTestSuite() {
     fs::remove_all(*dir_);
     delete dir_;
   }
+  // Rows are made when a test first needs them (ctest runs each test in its
+  // own process): "row" (seed 5, both sides), "other" (seed 6, back side).
+  static void MakeRow(const std::string& name) {
+    if (fs::exists(*dir_ / name / "truth.json")) return;
+    synth::SynthOptions o;
+    o.seed = name == "row" ? 5 : 6;
+    o.scene.num_trees = 2;  // one tree is too short a row to tell it from the next row
+    o.camera.sides = name == "row" ? "both" : "back";
+    o.patch_every = 0;
+    o.progress = false;
+    synth::RunSynth(o, *dir_ / name);
+  }
   static SideInputs Side(const std::string& row, const std::string& side) {
+    MakeRow(row);
     SideInputs in;
     const fs::path s = *dir_ / row / side;
     in.input = s / "images";
@@ -107,15 +110,23 @@ TEST_F(YieldTest, SidesOfDifferentRowsFailClearly) {
   EXPECT_FALSE(fs::exists(*dir_ / "mixed/yield.json"));
 }
 
-TEST_F(YieldTest, BadInputIsAClearError) {
+TEST(YieldInputTest, BadInputIsAClearError) {
+  const fs::path dir = test::FreshTempDir("yield_bad_input");
+  YieldInputs in;
+  in.front.input = dir / "front", in.back.input = dir / "back";
+  in.front.poses = dir / "front_poses";
+  in.out = dir / "out";
   YieldOptions o;
-  o.poses_registered = true;
-  YieldInputs in = Inputs("row", "row", "bad");
-  in.back.poses.clear();
+  o.poses_registered = true;  // needs poses for both sides
   EXPECT_THROW(RunYield(in, o), Error);
-  in = Inputs("row", "row", "bad");
-  in.truth = *dir_ / "no_truth.json";
+  in.back.poses = dir / "back_poses";
+  in.truth = dir / "no_truth.json";
   EXPECT_THROW(RunYield(in, YieldOptions()), Error);
+  in.truth.clear();
+  EXPECT_THROW(RunYield(in, YieldOptions()), Error);  // no such input folders
+  o.registration.min_matched = 1;  // options are checked
+  EXPECT_THROW(RunYield(in, o), Error);
+  fs::remove_all(dir);
 }
 
 }  // namespace
