@@ -27,8 +27,8 @@ ModelSelection ParseModelSelection(const std::string& name);
 struct GmmCounterOptions {
   // Largest count considered (the study's clusters hold 0..6 apples).
   int max_fruits = 6;
-  // BIC (default: on the MinneApple frames it was the better of the two, see
-  // docs/detection.md) or AIC, which penalises components less and so counts more.
+  // Coverage (default; BIC and AIC split filled discs and count more, see
+  // docs/detection.md), BIC, or AIC, which penalises components least.
   ModelSelection criterion = ModelSelection::kCoverage;
   // kCoverage: IoU a larger k must gain over a smaller one to be chosen.
   double coverage_tolerance = 0.03;

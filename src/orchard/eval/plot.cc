@@ -32,8 +32,9 @@ std::string Quote(const std::string& text) {
 
 // Terminal settings per output kind.
 std::string TerminalFor(const fs::path& path) {
-  if (path.extension() == ".svg") return "set terminal svg size 800,560 dynamic font 'Helvetica,14'\n";
-  return "set terminal pngcairo size 800,560 font 'Helvetica,12'\n";
+  // noenhanced: method names such as semi_blobs are text, not subscripts.
+  if (path.extension() == ".svg") return "set terminal svg size 800,560 dynamic noenhanced font 'Helvetica,14'\n";
+  return "set terminal pngcairo size 800,560 noenhanced font 'Helvetica,12'\n";
 }
 
 // Writes the figure to `png` and `svg`, each atomically: `body` is the script
