@@ -27,6 +27,8 @@ void AddDetectCommand(CLI::App& app) {
                   "default: the shipped models/gmm_red.json or models/unet.pt");
   cmd->add_option("--in", args->in, "Folder of images or a video file")->required();
   cmd->add_option("--out", args->out, "Output folder")->required();
+  cmd->add_flag("--whole-frame", args->detector.unet_whole_frame,
+               "unet: one pass over the whole frame instead of tiles without overlap");
   cmd->add_option("--threshold", args->detector.unet_threshold, "unet: apple probability threshold")
       ->capture_default_str();
   cmd->add_flag("--reference-slic", args->detector.reference_slic,

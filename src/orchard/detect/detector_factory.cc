@@ -36,6 +36,7 @@ std::unique_ptr<Detector> MakeDetector(const DetectorChoice& choice) {
   options.blobs = choice.blobs;
   options.threads = threads;
   options.threshold = choice.unet_threshold;
+  options.whole_frame = choice.unet_whole_frame;
   return std::make_unique<UNetDetector>(model, options);
 }
 

@@ -18,6 +18,7 @@ struct DetectorChoice {
   BlobOptions blobs;
   int threads = 0;  // 0 = all cores
   double unet_threshold = 0.5;
+  bool unet_whole_frame = false;  // unet: one pass over the whole frame instead of tiles
 
   void Check() const;
 };

@@ -14,6 +14,7 @@ namespace orchard {
 struct UNetDetector::Impl {
   nn::UNet net{nullptr};
   UNetDetectorOptions options;
+  int multiple = 1;  // the network's input sides must be multiples of this
 };
 
 void UNetDetectorOptions::Check() const {
@@ -35,7 +36,7 @@ UNetDetector::UNetDetector(const std::filesystem::path& model_path, const UNetDe
   } catch (const nlohmann::json::exception&) {
     Fail("model file ", model_path.string(), " has an incomplete U-Net header");
   }
-  const int multiple = impl_->net->options().InputMultiple();
+  const int multiple = impl_->multiple = impl_->net->options().InputMultiple();
   if (impl_->options.tile % multiple != 0) {
     Fail("U-Net tile ", impl_->options.tile, " is not a multiple of ", multiple, " as this network needs");
   }
@@ -50,6 +51,16 @@ UNetDetector::~UNetDetector() = default;
 cv::Mat1f UNetDetector::AppleProbability(const cv::Mat& bgr) {
   if (bgr.empty()) Fail("empty frame");
   if (bgr.type() != CV_8UC3) Fail("frame must be 8-bit BGR");
+  torch::NoGradGuard no_grad;
+  if (impl_->options.whole_frame) {
+    const int m = impl_->multiple;
+    cv::Mat padded;
+    cv::copyMakeBorder(bgr, padded, 0, (bgr.rows + m - 1) / m * m - bgr.rows, 0, (bgr.cols + m - 1) / m * m - bgr.cols,
+                       cv::BORDER_CONSTANT, cv::Scalar::all(0));
+    const torch::Tensor apple =
+        torch::softmax(impl_->net->forward(nn::ImagesToTensor({padded})), 1).select(1, 1)[0].contiguous();
+    return cv::Mat1f(padded.rows, padded.cols, apple.data_ptr<float>())(cv::Rect(0, 0, bgr.cols, bgr.rows)).clone();
+  }
   const int tile = impl_->options.tile;
   // Zero-pad to whole tiles; tiles do not overlap.
   const int cols = (bgr.cols + tile - 1) / tile, rows = (bgr.rows + tile - 1) / tile;
@@ -61,7 +72,6 @@ cv::Mat1f UNetDetector::AppleProbability(const cv::Mat& bgr) {
   for (int r = 0; r < rows; ++r) {
     for (int c = 0; c < cols; ++c) rects.emplace_back(c * tile, r * tile, tile, tile);
   }
-  torch::NoGradGuard no_grad;
   for (size_t begin = 0; begin < rects.size(); begin += impl_->options.batch) {
     const size_t end = std::min(rects.size(), begin + impl_->options.batch);
     std::vector<cv::Mat> tiles;

@@ -14,6 +14,11 @@ struct UNetDetectorOptions {
   // Inference tile side in pixels (frames are cut into tiles without overlap,
   // as the study did); 0 = the tile size the model was trained with.
   int tile = 0;
+  // Run the (fully convolutional) network once on the whole frame, zero-padded
+  // to the network's input multiple, instead of tile by tile: the same
+  // weights, no seams at tile borders, and fewer padded pixels (1920x1080
+  // becomes 1920x1088 instead of 2016x1120). Memory grows with the frame.
+  bool whole_frame = false;
   // Tiles per forward pass: larger is faster up to memory.
   int batch = 4;
   // A pixel is apple when the network's apple probability exceeds this.

@@ -78,6 +78,19 @@ TEST(UNetDetector, TrainsTinyNetworkAndDetectsDiscs) {
   UNetDetector again(dir / "unet.pt", detector_options);
   cv::Mat1f a = detector.AppleProbability(test.bgr), b = again.AppleProbability(test.bgr);
   EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0.0);
+  // One pass over the whole frame: same size; identical to the tiles on a
+  // frame of exactly one tile; close to them elsewhere (only the tile seams
+  // differ).
+  UNetDetectorOptions whole_options = detector_options;
+  whole_options.whole_frame = true;
+  UNetDetector whole(dir / "unet.pt", whole_options);
+  const cv::Mat one_tile = test.bgr(cv::Rect(0, 0, 32, 32)).clone();
+  EXPECT_LT(cv::norm(whole.AppleProbability(one_tile), detector.AppleProbability(one_tile), cv::NORM_INF), 1e-5);
+  const cv::Mat odd = test.bgr(cv::Rect(0, 0, test.bgr.cols - 5, test.bgr.rows - 3)).clone();
+  const cv::Mat1f w = whole.AppleProbability(odd), t = detector.AppleProbability(odd);
+  ASSERT_EQ(w.size(), odd.size());
+  const cv::Mat1b agree = (w > 0.5) == (t > 0.5);
+  EXPECT_GT(cv::countNonZero(agree), 0.9 * static_cast<double>(agree.total()));
 }
 
 TEST(UNetDetector, RejectsWrongFiles) {
