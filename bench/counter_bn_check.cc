@@ -5,16 +5,15 @@
 // (models/counter.md).
 //   counter_bn_check COUNTER.pt TRAIN_PATCH_DIR[,DIR2...] TEST_PATCH_DIR...
 #include <cstdio>
-#include <fstream>
 #include <sstream>
 #include <string>
 #include <vector>
 
-#include <opencv2/imgcodecs.hpp>
 #include <torch/torch.h>
 
 #include "orchard/core/error.h"
 #include "orchard/nn/checkpoint.h"
+#include "orchard/nn/counter_training.h"
 #include "orchard/nn/models.h"
 #include "orchard/nn/patch_input.h"
 
@@ -27,16 +26,9 @@ struct PatchSet {
 
 PatchSet ReadPatches(const std::string& dir, int input_size) {
   PatchSet set;
-  std::ifstream csv(dir + "/counts.csv");
-  if (!csv) orchard::Fail("no counts.csv in ", dir);
-  std::string line;
-  while (std::getline(csv, line)) {
-    const size_t comma = line.rfind(',');
-    if (comma == std::string::npos) continue;
-    const cv::Mat image = cv::imread(dir + "/images/" + line.substr(0, comma), cv::IMREAD_COLOR);
-    if (image.empty()) continue;  // a header line or a missing file
-    set.inputs.push_back(orchard::nn::LetterboxPatch(image, input_size));
-    set.counts.push_back(std::stoi(line.substr(comma + 1)));
+  for (const auto& patch : orchard::nn::ReadPatchFolder(dir)) {
+    set.inputs.push_back(orchard::nn::LetterboxPatch(patch.bgr, input_size));
+    set.counts.push_back(patch.count);
   }
   return set;
 }

@@ -1,7 +1,6 @@
 #include "orchard/fruitmap/side.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -17,6 +16,7 @@
 #include "orchard/core/error.h"
 #include "orchard/core/file_io.h"
 #include "orchard/core/frame_source.h"
+#include "orchard/core/stopwatch.h"
 #include "orchard/sfm/colmap_binary.h"
 
 namespace orchard {
@@ -360,13 +360,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   if (!in.detector && in.masks.empty()) Fail("give a detector or a folder of instance masks");
   if (!in.detector && !fs::is_directory(in.masks)) Fail("masks folder ", in.masks.string(), " does not exist");
   fs::create_directories(in.out);
-  auto clock = std::chrono::steady_clock::now();
-  auto lap = [&clock]() {
-    const auto now = std::chrono::steady_clock::now();
-    const double s = std::chrono::duration<double>(now - clock).count();
-    clock = now;
-    return s;
-  };
+  Stopwatch stopwatch;
   SideSummary s;
   // Frames and poses.
   ColmapModel model;
@@ -444,7 +438,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
     ScaleViews(scale, &views);
     ground.d *= scale;
   }
-  s.poses_s = lap();
+  s.poses_s = stopwatch.Lap();
   // Fruit per frame (cached).
   std::vector<fs::path> image_paths;
   std::vector<FruitFrame> frames;
@@ -456,11 +450,11 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
            v.width, "x", v.height);
     if (frames.size() % 20 == 0) spdlog::info("fruit in {} of {} frames", frames.size(), views.size());
   }
-  s.fruit_s = lap();
+  s.fruit_s = stopwatch.Lap();
   const ClusterResult r = CountFruitClusters(views, frames, ground, o.clusters);
-  s.clusters_s = lap();
+  s.clusters_s = stopwatch.Lap();
   WriteOutputs(in.out, image_paths, frames, r, o);
-  s.outputs_s = lap();
+  s.outputs_s = stopwatch.Lap();
   s.count = r.count;
   s.single_frame_sum = r.single_frame_sum;
   s.frames_used = static_cast<int>(views.size());

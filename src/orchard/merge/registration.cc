@@ -65,6 +65,21 @@ std::vector<std::pair<int, int>> MatchCentres(const std::vector<Eigen::Vector3d>
   return pairs;
 }
 
+std::vector<Eigen::Vector3d> Transformed(const Eigen::Isometry3d& t, const std::vector<Eigen::Vector3d>& points) {
+  std::vector<Eigen::Vector3d> moved;
+  moved.reserve(points.size());
+  for (const auto& p : points) moved.push_back(t * p);
+  return moved;
+}
+
+// RMS distance between matched centres.
+double RmsDistance(const std::vector<Eigen::Vector3d>& front, const std::vector<Eigen::Vector3d>& back_in_front,
+                   const std::vector<std::pair<int, int>>& pairs) {
+  double sum = 0;
+  for (const auto& [f, b] : pairs) sum += (front[f] - back_in_front[b]).squaredNorm();
+  return pairs.empty() ? 0 : std::sqrt(sum / static_cast<double>(pairs.size()));
+}
+
 // Closest points and a rigid fit in the ground plane, repeated.
 Fit Refine(const std::vector<Eigen::Vector3d>& front, const std::vector<Eigen::Vector3d>& back, const Candidate& start,
            const RegistrationOptions& o) {
@@ -72,10 +87,9 @@ Fit Refine(const std::vector<Eigen::Vector3d>& front, const std::vector<Eigen::V
   fit.heading_deg = start.heading_deg;
   fit.offset = start.offset;
   for (int it = 0; it < o.refine_iterations; ++it) {
-    const Eigen::Isometry3d t = BackToFrontTransform(fit.heading_deg, fit.offset.x(), fit.offset.y());
-    std::vector<Eigen::Vector3d> moved;
-    for (const auto& b : back) moved.push_back(t * b);
-    auto pairs = MatchCentres(front, moved, o.match_distance);
+    auto pairs = MatchCentres(
+        front, Transformed(BackToFrontTransform(fit.heading_deg, fit.offset.x(), fit.offset.y()), back),
+        o.match_distance);
     if (pairs.size() < 3) {
       fit.pairs = pairs;
       break;
@@ -99,14 +113,16 @@ Fit Refine(const std::vector<Eigen::Vector3d>& front, const std::vector<Eigen::V
     fit.heading_deg = heading, fit.offset = offset, fit.pairs = std::move(pairs);
     if (converged) break;
   }
-  const Eigen::Isometry3d t = BackToFrontTransform(fit.heading_deg, fit.offset.x(), fit.offset.y());
-  std::vector<Eigen::Vector3d> moved;
-  for (const auto& b : back) moved.push_back(t * b);
+  const auto moved = Transformed(BackToFrontTransform(fit.heading_deg, fit.offset.x(), fit.offset.y()), back);
   fit.pairs = MatchCentres(front, moved, o.match_distance);
-  double sum = 0;
-  for (const auto& [f, b] : fit.pairs) sum += (front[f] - moved[b]).squaredNorm();
-  fit.residual = fit.pairs.empty() ? 0 : std::sqrt(sum / static_cast<double>(fit.pairs.size()));
+  fit.residual = RmsDistance(front, moved, fit.pairs);
   return fit;
+}
+
+std::vector<Eigen::Vector3d> Centres(const SideCloud& side) {
+  std::vector<Eigen::Vector3d> centres;
+  for (const auto& c : side.clusters) centres.push_back(c.centre);
+  return centres;
 }
 
 // Along-row extent (min, max x) of centres.
@@ -125,15 +141,11 @@ Registration EvaluateAlignment(const SideCloud& front, const SideCloud& back, co
   const Eigen::Matrix3d rot = t.linear();
   r.heading_deg = std::remainder(std::atan2(rot(1, 0), rot(0, 0)) - M_PI, 2 * M_PI) * 180 / M_PI;
   r.along = t.translation().x(), r.across = t.translation().y();
-  std::vector<Eigen::Vector3d> fc, moved;
-  for (const auto& c : front.clusters) fc.push_back(c.centre);
-  for (const auto& c : back.clusters) moved.push_back(t * c.centre);
+  const std::vector<Eigen::Vector3d> fc = Centres(front), moved = Transformed(t, Centres(back));
   if (fc.empty() || moved.empty()) return r;
   r.pairs = MatchCentres(fc, moved, o.match_distance);
   r.matched = static_cast<int>(r.pairs.size());
-  double sum = 0;
-  for (const auto& [f, b] : r.pairs) sum += (fc[f] - moved[b]).squaredNorm();
-  r.residual = r.pairs.empty() ? 0 : std::sqrt(sum / static_cast<double>(r.pairs.size()));
+  r.residual = RmsDistance(fc, moved, r.pairs);
   const auto [f0, f1] = AlongExtent(fc);
   const auto [b0, b1] = AlongExtent(moved);
   r.front_length = f1 - f0, r.back_length = b1 - b0;
@@ -147,9 +159,7 @@ Registration RegisterSides(const SideCloud& front, const SideCloud& back, const 
     if (static_cast<int>(s->clusters.size()) < o.min_matched)
       Fail("the ", s->name, " side has ", s->clusters.size(), " fruit clusters, too few to register the two sides (need ",
            o.min_matched, ")");
-  std::vector<Eigen::Vector3d> fc, bc;
-  for (const auto& c : front.clusters) fc.push_back(c.centre);
-  for (const auto& c : back.clusters) bc.push_back(c.centre);
+  const std::vector<Eigen::Vector3d> fc = Centres(front), bc = Centres(back);
 
   // Hough vote: every pair of clusters at a similar height proposes the
   // offset that would put them on top of each other, for each heading.

@@ -54,6 +54,7 @@ SideCloud LoadSideCloud(const fs::path& dir, const std::string& name) {
     const auto& f = j.at("row_frame");
     cloud.to_row = RowFrameTransform(Vec3(f.at("origin")), Vec3(f.at("along")), Vec3(f.at("across")), Vec3(f.at("up")));
     cloud.count = j.at("count").get<int>();
+    if (j.contains("warnings")) cloud.warnings = j.at("warnings").get<std::vector<std::string>>();
   } catch (const nlohmann::json::exception& e) {
     Fail(name, " side: ", json_path.string(), " has no usable row_frame/count (made by an older version?): ", e.what());
   }

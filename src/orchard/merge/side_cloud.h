@@ -28,6 +28,7 @@ struct SideCloud {
   Eigen::Isometry3d to_row = Eigen::Isometry3d::Identity();
   std::vector<SideCluster> clusters;  // kept clusters only
   int count = 0;                      // the side's count (sum over kept clusters)
+  std::vector<std::string> warnings;  // side.json's warnings
 };
 
 // Fills centre, min and max from the points.

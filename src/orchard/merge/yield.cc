@@ -1,7 +1,6 @@
 #include "orchard/merge/yield.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <map>
 #include <sstream>
@@ -12,6 +11,7 @@
 #include "orchard/core/error.h"
 #include "orchard/core/file_io.h"
 #include "orchard/core/frame_source.h"
+#include "orchard/core/stopwatch.h"
 #include "orchard/merge/report.h"
 #include "orchard/merge/side_cloud.h"
 
@@ -28,13 +28,6 @@ void YieldOptions::Check() const {
 }
 
 namespace {
-
-double Seconds(std::chrono::steady_clock::time_point* clock) {
-  const auto now = std::chrono::steady_clock::now();
-  const double s = std::chrono::duration<double>(now - *clock).count();
-  *clock = now;
-  return s;
-}
 
 Json SideJson(const SideSummary& s, const SideCloud& cloud) {
   return {{"count", s.count},
@@ -81,7 +74,7 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
     Fail("--poses-registered needs given poses for both sides (--poses-front and --poses-back)");
   if (!in.truth.empty() && !fs::is_regular_file(in.truth)) Fail("truth file ", in.truth.string(), " does not exist");
   fs::create_directories(in.out);
-  auto clock = std::chrono::steady_clock::now();
+  Stopwatch stopwatch;
   Json timings = Json::object();
   YieldSummary y;
 
@@ -90,10 +83,10 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
   front.out = in.out / "front", back.out = in.out / "back";
   spdlog::info("[yield 1/4] front side: frames, poses, fruit, 3D clusters -> {}", front.out.string());
   y.front_side = RunSide(front, o.side);
-  timings["front side"] = Seconds(&clock);
+  timings["front side"] = stopwatch.Lap();
   spdlog::info("[yield 2/4] back side -> {}", back.out.string());
   y.back_side = RunSide(back, o.side);
-  timings["back side"] = Seconds(&clock);
+  timings["back side"] = stopwatch.Lap();
   for (const auto& [name, s] : {std::pair<std::string, const SideSummary*>{"front", &y.front_side}, {"back", &y.back_side}}) {
     timings[name + ": poses"] = s->poses_s;
     timings[name + ": detection and counting"] = s->fruit_s;
@@ -124,7 +117,7 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
                      {"note", "solved minus the transform implied by the given poses (meaningful when they share a frame)"}};
     }
   }
-  timings["registration"] = Seconds(&clock);
+  timings["registration"] = stopwatch.Lap();
   spdlog::info("aligned: heading {:.2f} deg, along {:.3f} m, across {:.3f} m, {} clusters matched, residual {:.1f} cm",
                y.registration.heading_deg, y.registration.along, y.registration.across, y.registration.matched,
                100 * y.registration.residual);
@@ -165,16 +158,13 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
   }
 
   Json warnings = Json::array();
-  for (const auto* s : {&front, &back}) {
-    const Json side = Json::parse(ReadTextFile(s->out / "side.json"), nullptr, false);
-    if (!side.is_discarded() && side.contains("warnings"))
-      for (const auto& w : side.at("warnings")) warnings.push_back((s == &front ? "front: " : "back: ") + w.get<std::string>());
-  }
+  for (const SideCloud* cloud : {&front_cloud, &back_cloud})
+    for (const auto& w : cloud->warnings) warnings.push_back(cloud->name + ": " + w);
   if (o.poses_registered && y.registration.matched < o.registration.min_matched)
     warnings.push_back("the given poses match only " + std::to_string(y.registration.matched) +
                        " clusters across the sides: are they really in one frame?");
 
-  timings["merge"] = Seconds(&clock);
+  timings["merge"] = stopwatch.Lap();
   Json j = {
       {"total", y.total},
       {"front", y.front},
@@ -246,7 +236,7 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
   write_side(back_in_front, shared.back_shared, 1);
   WriteTextFileAtomic(in.out / "clusters.csv", csv.str());
   WriteTextFileAtomic(in.out / "row.ply", ply.str());
-  timings["outputs"] = Seconds(&clock);
+  timings["outputs"] = stopwatch.Lap();
   j["timings_s"] = timings;
   std::vector<std::string> frames = SampleFrames(in.out, "front", o.report_frames);
   for (const auto& f : SampleFrames(in.out, "back", o.report_frames)) frames.push_back(f);
