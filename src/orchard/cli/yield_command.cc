@@ -41,6 +41,8 @@ void AddYieldCommand(CLI::App& app) {
   cmd->add_option("--max-heading", o.registration.max_heading_deg,
                   "Largest angle between the two camera paths (degrees)")
       ->capture_default_str();
+  cmd->add_flag("--no-row-registration{false}", o.row_registration,
+                "Register the sides from their shared fruit clusters only (no fallback to the row's ground and canopy)");
   cmd->add_option("--intersection-distance", o.shared.intersection_distance,
                   "Fruit points of the two sides closer than this (m) are the same apple (shared count)")
       ->capture_default_str();

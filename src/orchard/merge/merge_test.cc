@@ -1,6 +1,7 @@
 // Registration of two sides on synthetic geometry with known transforms, its
-// failures (unrelated rows, different stretches of a row), and the
-// inclusion-exclusion arithmetic of the shared count.
+// failures (unrelated rows, different stretches of a row), the registration
+// on the row's ground and canopy for sides that share few fruit clusters, and
+// the inclusion-exclusion arithmetic of the shared count.
 #include <algorithm>
 #include <random>
 
@@ -8,6 +9,7 @@
 
 #include "orchard/core/error.h"
 #include "orchard/merge/registration.h"
+#include "orchard/merge/row_registration.h"
 #include "orchard/merge/shared_count.h"
 #include "orchard/merge/side_cloud.h"
 
@@ -122,6 +124,159 @@ TEST(RegistrationTest, FailsWithTooFewClusters) {
   Sides(Canopy(6, 0, 2, 9), BackToFrontTransform(0, 0, 5), 10, &front, &back);
   back.clusters.resize(2);
   EXPECT_THROW(RegisterSides(front, back, RegistrationOptions()), Error);
+}
+
+// A row seen by COLMAP from both sides, in the front row frame: trees 1 m
+// wide at `trees` (x centres), canopy 1.2 m thick centred 2.5 m from the
+// front path, 0.6..3 m high; each side's sparse points are leaves between its
+// face and the centre plane, and ground over the stretch it films
+// (`seen_*`, x range); apples near each face, `shared` of them seen from both.
+struct RowScene {
+  std::vector<double> trees = {0, 1.25, 2.5, 3.75};
+  double seen_front_lo = -2, seen_front_hi = 5.75, seen_back_lo = -2, seen_back_hi = 5.75;
+  int shared = 0;
+  unsigned seed = 1;
+};
+
+void RowSides(const RowScene& scene, const Eigen::Isometry3d& back_to_front, SideCloud* front, SideCloud* back) {
+  std::mt19937 rng(scene.seed);
+  std::uniform_real_distribution<double> u(0, 1);
+  front->name = "front", back->name = "back";
+  const Eigen::Isometry3d to_back = back_to_front.inverse();
+  auto seen = [&](double x, bool f) {
+    return f ? x > scene.seen_front_lo && x < scene.seen_front_hi : x > scene.seen_back_lo && x < scene.seen_back_hi;
+  };
+  for (const bool f : {true, false}) {
+    SideCloud* side = f ? front : back;
+    auto add = [&](const Eigen::Vector3d& p) { side->sparse.push_back(f ? p : Eigen::Vector3d(to_back * p)); };
+    for (double t : scene.trees)
+      for (int i = 0; i < 600; ++i) {
+        const Eigen::Vector3d p(t - 0.5 + u(rng), f ? 1.9 + 0.6 * u(rng) : 3.1 - 0.6 * u(rng), 0.6 + 2.4 * u(rng));
+        if (seen(p.x(), f)) add(p);
+      }
+    const double lo = f ? scene.seen_front_lo : scene.seen_back_lo, hi = f ? scene.seen_front_hi : scene.seen_back_hi;
+    // The cameras film 2 m either side of where they pass, 1.5 m high.
+    for (double x = lo + 2; x <= hi - 2 + 1e-9; x += 0.125) {
+      const Eigen::Vector3d c(x, f ? 0 : 5, 1.5);
+      side->cameras.push_back(f ? c : Eigen::Vector3d(to_back * c));
+    }
+    for (int i = 0; i < 800; ++i) add(Eigen::Vector3d(lo + (hi - lo) * u(rng), f ? 0.5 + 5 * u(rng) : 5 - 4.5 * u(rng), 0.01 * u(rng)));
+    // Apples near the face, the two sides' apart along the row so that none
+    // is shared by chance.
+    int id = 0;
+    for (double x = scene.trees.front() - 0.4 + (f ? 0 : 0.18); x < scene.trees.back() + 0.4; x += 0.37) {
+      if (!seen(x, f)) continue;
+      const Eigen::Vector3d p(x, f ? 2.0 : 3.0, 1.0 + std::fmod(x * 7.3 + 10, 1.5));
+      side->clusters.push_back(Cluster(id++, 1, {f ? p : Eigen::Vector3d(to_back * p)}));
+    }
+    for (int k = 0; k < scene.shared; ++k) {
+      const Eigen::Vector3d p(0.2 + 0.9 * k, 2.5, 2.7 - 0.3 * k);
+      side->clusters.push_back(Cluster(id++, 1, {f ? p : Eigen::Vector3d(to_back * p)}));
+    }
+  }
+}
+
+TEST(RowRegistrationTest, RecoversKnownTransformsWithoutSharedFruit) {
+  // The apples seen by both sides are too few for the fruit registration.
+  for (const auto& [along, across] : {std::pair{0.0, 5.0}, {0.4, 5.3}, {-0.8, 4.7}}) {
+    SideCloud front, back;
+    RowSides(RowScene(), BackToFrontTransform(0, along, across), &front, &back);
+    EXPECT_THROW(RegisterSides(front, back, RegistrationOptions()), Error);
+    const Registration r = RegisterSidesOnRow(front, back, RowRegistrationOptions());
+    EXPECT_TRUE(r.on_row);
+    EXPECT_NEAR(r.heading_deg, 0, 1e-9);  // kept at the half turn
+    EXPECT_NEAR(r.along, along, 0.05);
+    // Assumed: each side's leaves reach the centre plane; the 95% quantile
+    // of a 0.6 m band falls 3 cm short of it on each side.
+    EXPECT_TRUE(r.across_assumed);
+    EXPECT_NEAR(r.across, across - 0.06, 0.03);
+    EXPECT_GT(r.correlation, 0.8);
+    EXPECT_GT(r.overlap, 3.5);  // the camera paths: 0..3.75 m
+  }
+  // A path not quite parallel (0.5 deg): the half turn is kept, so the
+  // heading is off by that much and the offsets stay close.
+  SideCloud front, back;
+  RowSides(RowScene(), BackToFrontTransform(0.5, 0.3, 5.0), &front, &back);
+  const Registration r = RegisterSidesOnRow(front, back, RowRegistrationOptions());
+  EXPECT_NEAR(r.along, 0.3, 0.06);
+  EXPECT_NEAR(r.across, 5.0 - 0.06, 0.06);
+}
+
+TEST(RowRegistrationTest, TakesTheAcrossDistanceFromSharedFruit) {
+  RowScene scene;
+  scene.shared = 4;  // too few for the fruit registration (needs 5)
+  SideCloud front, back;
+  RowSides(scene, BackToFrontTransform(0, 0.25, 5.1), &front, &back);
+  EXPECT_THROW(RegisterSides(front, back, RegistrationOptions()), Error);
+  const Registration r = RegisterSidesOnRow(front, back, RowRegistrationOptions());
+  EXPECT_FALSE(r.across_assumed);
+  EXPECT_EQ(r.matched, 4);
+  EXPECT_NEAR(r.along, 0.25, 0.01);
+  EXPECT_NEAR(r.across, 5.1, 0.01);
+  EXPECT_LT(r.residual, 0.01);
+}
+
+TEST(RowRegistrationTest, FailsWhenTheProfilesDoNotMatch) {
+  // The back side of another row: three trees of other widths and gaps.
+  SideCloud front, back, other_front, other_back;
+  const Eigen::Isometry3d t = BackToFrontTransform(0, 0, 5);
+  RowSides(RowScene(), t, &front, &back);
+  RowScene other;
+  other.trees = {-1.0, 0.1, 3.9};
+  other.seed = 2;
+  RowSides(other, t, &other_front, &other_back);
+  try {
+    RegisterSidesOnRow(front, other_back, RowRegistrationOptions());
+    FAIL() << "registered two different rows";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("same row"), std::string::npos) << e.what();
+  }
+}
+
+TEST(RowRegistrationTest, FailsWhenTheSidesCoverDifferentStretches) {
+  // A row of eight trees (unevenly spaced, as real ones are); the front
+  // passes 0..4 m, the back 5..9 m.
+  RowScene scene;
+  scene.trees = {0, 1.1, 2.5, 3.6, 5.1, 6.2, 7.6, 8.9};
+  scene.seen_front_lo = -2, scene.seen_front_hi = 6, scene.seen_back_lo = 3, scene.seen_back_hi = 11;
+  SideCloud front, back;
+  RowSides(scene, BackToFrontTransform(0, 0, 5), &front, &back);
+  try {
+    RegisterSidesOnRow(front, back, RowRegistrationOptions());
+    FAIL() << "registered sides that cover different stretches";
+  } catch (const Error& e) {
+    const std::string m = e.what();
+    EXPECT_TRUE(m.find("different stretches") != std::string::npos || m.find("same row") != std::string::npos) << m;
+  }
+}
+
+TEST(RowRegistrationTest, LevelsASideOnTheGroundOfItsSparsePoints) {
+  SideCloud front, back;
+  RowSides(RowScene(), BackToFrontTransform(0, 0, 5), &front, &back);
+  RowRegistrationOptions o;
+  EXPECT_FALSE(LevelOnSparseGround(&front, o).changed);  // already on its ground
+  // The side took a plane 0.75 m above the ground for its ground and
+  // scaled itself so that the cameras stand 1.5 m above that plane: lengths
+  // are 2x too long, the true ground at z = -1.5.
+  SideCloud wrong = front;
+  for (auto& p : wrong.sparse) p = 2 * (p - Eigen::Vector3d(0, 0, 0.75));
+  for (auto& c : wrong.clusters) {
+    for (auto& p : c.points) p = 2 * (p - Eigen::Vector3d(0, 0, 0.75));
+    UpdateClusterExtent(&c);
+  }
+  const Levelling l = LevelOnSparseGround(&wrong, o);
+  EXPECT_TRUE(l.changed);
+  EXPECT_NEAR(l.ground_height, -1.5, 0.02);
+  EXPECT_NEAR(l.scale, 0.5, 0.01);
+  for (size_t i = 0; i < front.clusters.size(); ++i)
+    EXPECT_LT((wrong.clusters[i].centre - front.clusters[i].centre).norm(), 0.02) << i;
+  // Too few sparse points: no levelling, and no registration on the row.
+  SideCloud bare = front;
+  bare.sparse.resize(20);
+  EXPECT_FALSE(LevelOnSparseGround(&bare, o).changed);
+  EXPECT_THROW(RegisterSidesOnRow(bare, back, o), Error);
+  o.min_correlation = 1.5;
+  EXPECT_THROW(o.Check(), Error);
 }
 
 TEST(SharedCountTest, InclusionExclusionOverIntersectingClusters) {

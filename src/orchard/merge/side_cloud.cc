@@ -46,6 +46,7 @@ Eigen::Vector3d Vec3(const nlohmann::json& j) {
 SideCloud LoadSideCloud(const fs::path& dir, const std::string& name) {
   SideCloud cloud;
   cloud.name = name;
+  double scale = 1;  // COLMAP's model -> metres (the poses were scaled by it before the row frame was made)
   const fs::path json_path = dir / "side.json", csv_path = dir / "clusters.csv", ply_path = dir / "fruit.ply";
   for (const auto& p : {json_path, csv_path, ply_path})
     if (!fs::is_regular_file(p)) Fail(name, " side: ", p.string(), " is missing (run `orchard side` first)");
@@ -54,6 +55,8 @@ SideCloud LoadSideCloud(const fs::path& dir, const std::string& name) {
     const auto& f = j.at("row_frame");
     cloud.to_row = RowFrameTransform(Vec3(f.at("origin")), Vec3(f.at("along")), Vec3(f.at("across")), Vec3(f.at("up")));
     cloud.count = j.at("count").get<int>();
+    cloud.row_distance = j.value("row_distance", 0.0);
+    scale = j.value("scale", 1.0);
     if (j.contains("warnings")) cloud.warnings = j.at("warnings").get<std::vector<std::string>>();
   } catch (const nlohmann::json::exception& e) {
     Fail(name, " side: ", json_path.string(), " has no usable row_frame/count (made by an older version?): ", e.what());
@@ -106,6 +109,40 @@ SideCloud LoadSideCloud(const fs::path& dir, const std::string& name) {
       if (it != index.end()) cloud.clusters[it->second].points.push_back(cloud.to_row * p);
     }
     if (header) Fail(name, " side: ", ply_path.string(), " has no PLY header");
+  }
+  // Sparse points (COLMAP text: "id x y z r g b error track..."); the side
+  // writes sparse/ only for the poses it solved itself.
+  const fs::path points_path = dir / "sparse" / "points3D.txt";
+  if (fs::is_regular_file(points_path)) {
+    std::ifstream in(points_path);
+    std::string line;
+    while (std::getline(in, line)) {
+      if (line.empty() || line[0] == '#') continue;
+      std::istringstream ls(line);
+      long long id;
+      Eigen::Vector3d p;
+      if (!(ls >> id >> p.x() >> p.y() >> p.z()))
+        Fail(name, " side: ", points_path.string(), " has a line that is not 'id x y z ...'");
+      cloud.sparse.push_back(cloud.to_row * (scale * p));
+    }
+    // Camera centres: "id qw qx qy qz tx ty tz camera name", then a line of
+    // 2D points.
+    std::ifstream images(dir / "sparse" / "images.txt");
+    bool pose_line = true;
+    while (std::getline(images, line)) {
+      if (!line.empty() && line[0] == '#') continue;
+      if (pose_line) {
+        std::istringstream ls(line);
+        long long id;
+        double qw, qx, qy, qz;
+        Eigen::Vector3d t;
+        if (!(ls >> id >> qw >> qx >> qy >> qz >> t.x() >> t.y() >> t.z()))
+          Fail(name, " side: ", (dir / "sparse" / "images.txt").string(), " has a pose line that is not 'id qw qx qy qz tx ty tz ...'");
+        const Eigen::Vector3d centre = -(Eigen::Quaterniond(qw, qx, qy, qz).normalized().toRotationMatrix().transpose() * t);
+        cloud.cameras.push_back(cloud.to_row * (scale * centre));
+      }
+      pose_line = !pose_line;
+    }
   }
   for (auto& c : cloud.clusters) {
     if (c.points.empty()) Fail(name, " side: cluster ", c.id, " of ", csv_path.string(), " has no points in ", ply_path.string());

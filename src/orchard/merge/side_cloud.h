@@ -1,6 +1,7 @@
-// One side's kept fruit clusters in its row frame (x along the camera path,
-// y across towards the row, z up from the ground, metres), read back from an
-// `orchard side` output folder: the merge's only input from the side stage.
+// One side's kept fruit clusters and, with COLMAP poses, its sparse scene
+// points, in its row frame (x along the camera path, y across towards the
+// row, z up from the ground, metres), read back from an `orchard side` output
+// folder: the merge's only input from the side stage.
 #pragma once
 
 #include <filesystem>
@@ -28,6 +29,11 @@ struct SideCloud {
   Eigen::Isometry3d to_row = Eigen::Isometry3d::Identity();
   std::vector<SideCluster> clusters;  // kept clusters only
   int count = 0;                      // the side's count (sum over kept clusters)
+  // COLMAP's sparse points (sparse/points3D.txt, scaled like the poses):
+  // leaves, branches, trunks and ground of the row. Empty with given poses.
+  std::vector<Eigen::Vector3d> sparse;
+  std::vector<Eigen::Vector3d> cameras;  // camera centres (sparse/images.txt), with the sparse points
+  double row_distance = 0;  // side.json: the filmed row's fruit distance from the camera path (m)
   std::vector<std::string> warnings;  // side.json's warnings
 };
 
@@ -40,8 +46,9 @@ Eigen::Isometry3d RowFrameTransform(const Eigen::Vector3d& origin, const Eigen::
                                     const Eigen::Vector3d& across, const Eigen::Vector3d& up);
 
 // Reads side.json (row_frame, count), clusters.csv (kept clusters and their
-// counts) and fruit.ply (points with cluster ids) of `side_dir`. Throws
-// orchard::Error naming the file when one is missing or malformed.
+// counts), fruit.ply (points with cluster ids) and, when present,
+// sparse/points3D.txt and images.txt of `side_dir`. Throws orchard::Error naming the file
+// when one is missing or malformed.
 SideCloud LoadSideCloud(const fs::path& side_dir, const std::string& name);
 
 }  // namespace orchard

@@ -22,6 +22,7 @@ using Json = nlohmann::json;
 void YieldOptions::Check() const {
   side.Check();
   registration.Check();
+  row.Check();
   shared.Check();
   ORCHARD_CHECK_OPTION(bin_length > 0, "bin length must be positive, got ", bin_length);
   ORCHARD_CHECK_OPTION(report_frames >= 0, "report frames must be >= 0, got ", report_frames);
@@ -39,7 +40,7 @@ Json SideJson(const SideSummary& s, const SideCloud& cloud) {
 }
 
 Json AlignmentJson(const Registration& r, const std::string& method) {
-  return {{"method", method},
+  Json j = {{"method", method},
           {"heading_deg", r.heading_deg},
           {"along_m", r.along},
           {"across_m", r.across},
@@ -49,6 +50,13 @@ Json AlignmentJson(const Registration& r, const std::string& method) {
           {"overlap_m", r.overlap},
           {"front_length_m", r.front_length},
           {"back_length_m", r.back_length}};
+  if (r.on_row) {
+    j["profile_correlation"] = r.correlation;
+    j["chance_profile_correlation"] = r.chance_correlation;
+    j["across_from"] = r.across_assumed ? "assumed: each side sees into the canopy up to its centre plane"
+                                        : "fruit clusters seen from both sides";
+  }
+  return j;
 }
 
 // Annotated frames written by the side, evenly spread (paths relative to out).
@@ -95,8 +103,29 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
 
   // 3: registration.
   spdlog::info("[yield 3/4] registering the two sides");
-  const SideCloud front_cloud = LoadSideCloud(front.out, "front");
-  const SideCloud back_cloud = LoadSideCloud(back.out, "back");
+  SideCloud front_cloud = LoadSideCloud(front.out, "front");
+  SideCloud back_cloud = LoadSideCloud(back.out, "back");
+  RowRegistrationOptions row_options = o.row;
+  row_options.camera_height = o.side.camera_height;
+  Json levelling = Json::object(), level_warnings = Json::array();
+  if (!o.poses_registered) {
+    // Ground planes level and coincident, scales alike: the side's own
+    // ground fit can take the canopy's lower edge for the ground.
+    for (SideCloud* cloud : {&front_cloud, &back_cloud}) {
+      const Levelling l = LevelOnSparseGround(cloud, row_options);
+      if (l.ground_points == 0) continue;
+      levelling[cloud->name] = {{"changed", l.changed}, {"ground_height_m", l.ground_height},
+                                {"tilt_deg", l.tilt_deg}, {"scale", l.scale}, {"ground_points", l.ground_points}};
+      if (l.changed) {
+        const std::string w = cloud->name + ": its sparse points show the ground " + std::to_string(-l.ground_height) +
+                              " m below its ground plane (tilt " + std::to_string(l.tilt_deg) +
+                              " deg): re-levelled and rescaled by " + std::to_string(l.scale) +
+                              " for the merge (the side's own count used the old plane)";
+        spdlog::warn("{}", w);
+        level_warnings.push_back(w);
+      }
+    }
+  }
   std::string method;
   Json given_check;
   // The transform the given poses imply when both are in one frame.
@@ -105,8 +134,17 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
     y.registration = EvaluateAlignment(front_cloud, back_cloud, given, o.registration);
     method = "given poses in one frame";
   } else {
-    y.registration = RegisterSides(front_cloud, back_cloud, o.registration);
-    method = "fruit clusters seen from both sides (Hough vote + closest points)";
+    try {
+      y.registration = RegisterSides(front_cloud, back_cloud, o.registration);
+      method = "fruit clusters seen from both sides (Hough vote + closest points)";
+    } catch (const Error& fruit_error) {
+      if (!o.row_registration || front_cloud.sparse.empty() || back_cloud.sparse.empty()) throw;
+      spdlog::info("fruit registration failed ({}); registering on the row", fruit_error.what());
+      y.registration = RegisterSidesOnRow(front_cloud, back_cloud, row_options);
+      method = "row: levelled grounds, canopy profiles along the row, " +
+               std::string(y.registration.across_assumed ? "across assumed (canopy centre plane)"
+                                                         : "across from shared fruit clusters");
+    }
     if (!in.front.poses.empty() && !in.back.poses.empty()) {
       // Both sides came with poses: if they share a frame (the generator's
       // true poses, RTK-GNSS), this is the registration's error.
@@ -160,6 +198,7 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
   Json warnings = Json::array();
   for (const SideCloud* cloud : {&front_cloud, &back_cloud})
     for (const auto& w : cloud->warnings) warnings.push_back(cloud->name + ": " + w);
+  for (const auto& w : level_warnings) warnings.push_back(w);
   if (o.poses_registered && y.registration.matched < o.registration.min_matched)
     warnings.push_back("the given poses match only " + std::to_string(y.registration.matched) +
                        " clusters across the sides: are they really in one frame?");
@@ -179,6 +218,7 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
       {"version", ORCHARD_VERSION},
   };
   if (!given_check.is_null()) j["alignment"]["minus_given_poses"] = given_check;
+  if (!levelling.empty()) j["alignment"]["levelling"] = levelling;
   j["settings"] = {
       {"front", in.front.input.string()},
       {"back", in.back.input.string()},
@@ -190,6 +230,7 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
       {"camera_height_m", o.side.camera_height},
       {"link_distance_m", o.side.clusters.link_distance},
       {"match_distance_m", o.registration.match_distance},
+      {"row_registration", o.row_registration},
       {"intersection_distance_m", o.shared.intersection_distance},
   };
   if (!in.truth.empty()) {

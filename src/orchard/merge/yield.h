@@ -9,6 +9,7 @@
 
 #include "orchard/fruitmap/side.h"
 #include "orchard/merge/registration.h"
+#include "orchard/merge/row_registration.h"
 #include "orchard/merge/shared_count.h"
 
 namespace orchard {
@@ -24,12 +25,17 @@ struct YieldOptions {
   YieldOptions() { side.clusters.min_points = 5; }
   SideOptions side;
   RegistrationOptions registration;
+  // When the fruit clusters do not register the sides and both have COLMAP's
+  // sparse points: level them on their ground and register them on the row
+  // (row_registration.h). Its camera height is taken from `side`.
+  bool row_registration = true;
+  RowRegistrationOptions row;
   SharedCountOptions shared;
   // Length (m) of the along-row bins of the yield map.
   double bin_length = 1.0;
   // Take the given poses of both sides as one frame (RTK-GNSS, a SLAM run
   // over both sides, the generator's true poses) instead of registering the
-  // sides from their fruit. Needs given poses for both sides.
+  // sides. Needs given poses for both sides.
   bool poses_registered = false;
   // Annotated sample frames per side shown in the report.
   int report_frames = 2;

@@ -1,0 +1,330 @@
+#include "orchard/merge/row_registration.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "orchard/core/error.h"
+
+namespace orchard {
+
+void RowRegistrationOptions::Check() const {
+  ORCHARD_CHECK_OPTION(camera_height > 0, "camera height must be positive, got ", camera_height);
+  ORCHARD_CHECK_OPTION(min_ground_fraction > 0 && min_ground_fraction < 1, "min ground fraction must be in (0, 1), got ",
+                       min_ground_fraction);
+  ORCHARD_CHECK_OPTION(ground_layer > 0, "ground layer must be positive, got ", ground_layer);
+  ORCHARD_CHECK_OPTION(max_ground_offset >= 0, "max ground offset must be >= 0, got ", max_ground_offset);
+  ORCHARD_CHECK_OPTION(max_ground_tilt_deg >= 0, "max ground tilt must be >= 0, got ", max_ground_tilt_deg);
+  ORCHARD_CHECK_OPTION(canopy_min_height < canopy_max_height, "canopy heights must be min < max, got ",
+                       canopy_min_height, "..", canopy_max_height);
+  ORCHARD_CHECK_OPTION(canopy_depth > 0, "canopy depth must be positive, got ", canopy_depth);
+  ORCHARD_CHECK_OPTION(min_canopy_points >= 10, "min canopy points must be >= 10, got ", min_canopy_points);
+  ORCHARD_CHECK_OPTION(profile_bin > 0, "profile bin must be positive, got ", profile_bin);
+  ORCHARD_CHECK_OPTION(profile_smoothing >= 0, "profile smoothing must be >= 0, got ", profile_smoothing);
+  ORCHARD_CHECK_OPTION(max_along > 0, "max along must be positive, got ", max_along);
+  ORCHARD_CHECK_OPTION(min_correlation > -1 && min_correlation < 1, "min correlation must be in (-1, 1), got ",
+                       min_correlation);
+  ORCHARD_CHECK_OPTION(min_overlap >= 0 && min_overlap <= 1, "min overlap must be in [0, 1], got ", min_overlap);
+  ORCHARD_CHECK_OPTION(match_distance > 0, "match distance must be positive, got ", match_distance);
+  ORCHARD_CHECK_OPTION(along_window >= 0, "along window must be >= 0, got ", along_window);
+  ORCHARD_CHECK_OPTION(max_thickness > 0, "max thickness must be positive, got ", max_thickness);
+  ORCHARD_CHECK_OPTION(grid_step > 0, "grid step must be positive, got ", grid_step);
+  ORCHARD_CHECK_OPTION(min_matched >= 1, "min matched must be >= 1, got ", min_matched);
+  ORCHARD_CHECK_OPTION(min_distinctness >= 1, "min distinctness must be >= 1, got ", min_distinctness);
+  ORCHARD_CHECK_OPTION(centre_quantile > 0 && centre_quantile <= 1, "centre quantile must be in (0, 1], got ",
+                       centre_quantile);
+  ORCHARD_CHECK_OPTION(max_heading_deg >= 0 && max_heading_deg < 90, "max heading must be in [0, 90), got ",
+                       max_heading_deg);
+}
+
+namespace {
+
+double Quantile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  const size_t k = std::min(v.size() - 1, static_cast<size_t>(q * static_cast<double>(v.size())));
+  std::nth_element(v.begin(), v.begin() + static_cast<long>(k), v.end());
+  return v[k];
+}
+
+// Least-squares plane z = a x + b y + c.
+Eigen::Vector3d FitHeightPlane(const std::vector<Eigen::Vector3d>& pts) {
+  Eigen::MatrixXd a(pts.size(), 3);
+  Eigen::VectorXd z(pts.size());
+  for (size_t i = 0; i < pts.size(); ++i) {
+    const auto k = static_cast<Eigen::Index>(i);
+    a(k, 0) = pts[i].x(), a(k, 1) = pts[i].y(), a(k, 2) = 1, z(k) = pts[i].z();
+  }
+  return a.colPivHouseholderQr().solve(z);
+}
+
+// The canopy the camera faces: sparse points at canopy height from the
+// nearest dense 10 cm layer across the row to canopy_depth beyond it.
+std::vector<Eigen::Vector3d> Canopy(const SideCloud& side, const RowRegistrationOptions& o, double* face) {
+  std::map<int, int> layers;
+  for (const auto& p : side.sparse)
+    if (p.z() > o.canopy_min_height && p.z() < o.canopy_max_height && p.y() > 0.3) ++layers[static_cast<int>(p.y() / 0.1)];
+  int most = 0;
+  for (const auto& [k, n] : layers) most = std::max(most, n);
+  *face = 0;
+  for (const auto& [k, n] : layers)
+    if (n >= 0.25 * most) {
+      *face = k * 0.1;
+      break;
+    }
+  std::vector<Eigen::Vector3d> canopy;
+  for (const auto& p : side.sparse)
+    if (p.z() > o.canopy_min_height && p.z() < o.canopy_max_height && p.y() > *face - 0.1 &&
+        p.y() < *face + o.canopy_depth)
+      canopy.push_back(p);
+  return canopy;
+}
+
+// Direction of the canopy in the ground plane (radians from the side's x
+// axis): a line through the median distance of each 25 cm slice along it,
+// so that dense and sparse stretches weigh alike.
+double CanopyDirection(const std::vector<Eigen::Vector3d>& canopy) {
+  std::map<int, std::vector<double>> slices;
+  for (const auto& p : canopy) slices[static_cast<int>(std::floor(p.x() / 0.25))].push_back(p.y());
+  std::vector<Eigen::Vector2d> xy;
+  for (const auto& [k, ys] : slices)
+    if (ys.size() >= 5) xy.emplace_back((k + 0.5) * 0.25, Quantile(ys, 0.5));
+  if (xy.size() < 3) return 0;
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (const auto& p : xy) mean += p;
+  mean /= static_cast<double>(xy.size());
+  double sxx = 0, sxy = 0;
+  for (const auto& p : xy) sxx += (p.x() - mean.x()) * (p.x() - mean.x()), sxy += (p.x() - mean.x()) * (p.y() - mean.y());
+  return std::atan2(sxy, sxx);
+}
+
+// Smoothed sqrt-density of x per bin (sqrt: the sides see the canopy with
+// very different numbers of points), over bins [lo, hi).
+std::vector<double> Profile(const std::vector<double>& xs, int lo, int hi, const RowRegistrationOptions& o) {
+  std::vector<double> count(hi - lo, 0), out(hi - lo, 0);
+  for (double x : xs) {
+    const int k = static_cast<int>(std::floor(x / o.profile_bin)) - lo;
+    if (k >= 0 && k < hi - lo) count[k] += 1;
+  }
+  for (auto& c : count) c = std::sqrt(c);
+  const int r = static_cast<int>(std::ceil(2 * o.profile_smoothing / o.profile_bin));
+  const double s = o.profile_smoothing / o.profile_bin;
+  for (int i = 0; i < hi - lo; ++i) {
+    double sum = 0, w = 0;
+    for (int j = std::max(0, i - r); j <= std::min(hi - lo - 1, i + r); ++j) {
+      const double g = s > 0 ? std::exp(-0.5 * (i - j) * (i - j) / (s * s)) : (i == j);
+      sum += g * count[j], w += g;
+    }
+    out[i] = sum / w;
+  }
+  return out;
+}
+
+// Pearson correlation of a[i] and b[i - lag] over the bins both observe.
+double Correlation(const std::vector<double>& a, int a_lo, const std::vector<double>& b, int b_lo, int lag, int from,
+                   int to) {
+  double sa = 0, sb = 0, saa = 0, sbb = 0, sab = 0;
+  int n = 0;
+  for (int k = from; k < to; ++k) {
+    const int i = k - a_lo, j = k - lag - b_lo;
+    if (i < 0 || i >= static_cast<int>(a.size()) || j < 0 || j >= static_cast<int>(b.size())) continue;
+    sa += a[i], sb += b[j], saa += a[i] * a[i], sbb += b[j] * b[j], sab += a[i] * b[j], ++n;
+  }
+  if (n < 3) return -1;
+  const double va = saa - sa * sa / n, vb = sbb - sb * sb / n;
+  if (va <= 1e-12 || vb <= 1e-12) return -1;
+  return (sab - sa * sb / n) / std::sqrt(va * vb);
+}
+
+std::vector<double> Xs(const std::vector<Eigen::Vector3d>& pts, const Eigen::Isometry3d& t) {
+  std::vector<double> xs;
+  xs.reserve(pts.size());
+  for (const auto& p : pts) xs.push_back((t * p).x());
+  return xs;
+}
+
+}  // namespace
+
+Levelling LevelOnSparseGround(SideCloud* side, const RowRegistrationOptions& o) {
+  o.Check();
+  Levelling l;
+  const double h = o.camera_height;
+  std::map<int, std::vector<Eigen::Vector3d>> slabs;  // 5 cm slabs of height
+  int below = 0;
+  for (const auto& p : side->sparse)
+    if (p.z() < h) slabs[static_cast<int>(std::floor(p.z() / 0.05))].push_back(p), ++below;
+  if (below < o.min_canopy_points) return l;
+  double slab = 0;
+  bool found = false;
+  for (const auto& [k, pts] : slabs)
+    if (pts.size() >= o.min_ground_fraction * below) {
+      slab = (k + 0.5) * 0.05, found = true;
+      break;
+    }
+  if (!found) return l;
+  std::vector<Eigen::Vector3d> layer;
+  for (const auto& p : side->sparse)
+    if (std::abs(p.z() - slab) < o.ground_layer) layer.push_back(p);
+  Eigen::Vector3d plane = FitHeightPlane(layer);  // z = a x + b y + c
+  // Once more without the points far off it (low leaves, stems).
+  std::vector<Eigen::Vector3d> kept;
+  for (const auto& p : layer)
+    if (std::abs(p.z() - plane.dot(Eigen::Vector3d(p.x(), p.y(), 1))) < 0.5 * o.ground_layer) kept.push_back(p);
+  if (kept.size() >= 3) plane = FitHeightPlane(kept), layer.swap(kept);
+  l.ground_points = static_cast<int>(layer.size());
+  Eigen::Vector3d up(-plane.x(), -plane.y(), 1);
+  up.normalize();
+  // Height of the plane under the cameras (the row frame's origin lies under them).
+  l.ground_height = plane.z();
+  l.tilt_deg = std::acos(std::min(1.0, up.z())) * 180 / M_PI;
+  if (std::abs(l.ground_height) <= o.max_ground_offset && l.tilt_deg <= o.max_ground_tilt_deg) return l;
+  // New frame: up the plane's normal, along the old x laid into the plane,
+  // origin on the plane under the old origin; then scaled so that the
+  // cameras (camera_height above the old ground) stand camera_height above it.
+  Eigen::Vector3d along = Eigen::Vector3d::UnitX() - up * up.x();
+  along.normalize();
+  const Eigen::Vector3d across = up.cross(along);
+  const Eigen::Vector3d origin(0, 0, l.ground_height);
+  const double camera_above = up.dot(Eigen::Vector3d(0, 0, h) - origin);
+  if (!(camera_above > 0.1 * h))
+    Fail(side->name, " side: the ground found in its sparse points lies at the cameras' height; cannot level it");
+  l.scale = h / camera_above;
+  Eigen::Matrix3d rot;
+  rot.row(0) = along.transpose(), rot.row(1) = across.transpose(), rot.row(2) = up.transpose();
+  auto move = [&](const Eigen::Vector3d& p) { return Eigen::Vector3d(l.scale * (rot * (p - origin))); };
+  for (auto& p : side->sparse) p = move(p);
+  for (auto& p : side->cameras) p = move(p);
+  for (auto& c : side->clusters) {
+    for (auto& p : c.points) p = move(p);
+    UpdateClusterExtent(&c);
+  }
+  l.transform.linear() = l.scale * rot;
+  l.transform.translation() = -l.scale * rot * origin;
+  l.changed = true;
+  return l;
+}
+
+Registration RegisterSidesOnRow(const SideCloud& front, const SideCloud& back, const RowRegistrationOptions& o) {
+  o.Check();
+  double face_f = 0, face_b = 0;
+  const std::vector<Eigen::Vector3d> canopy_f = Canopy(front, o, &face_f), canopy_b = Canopy(back, o, &face_b);
+  for (const auto* c : {&canopy_f, &canopy_b})
+    if (static_cast<int>(c->size()) < o.min_canopy_points)
+      Fail("the ", c == &canopy_f ? "front" : "back", " side has ", c->size(),
+           " sparse canopy points, too few to register the sides on the row (need ", o.min_canopy_points,
+           "; given poses have none)");
+
+  // Heading: the half turn, or the angle between the canopy lines (the
+  // back's, turned by the half turn plus the heading, runs along the front's).
+  const double heading_deg =
+      o.heading_from_canopy
+          ? std::clamp(std::remainder(CanopyDirection(canopy_f) - CanopyDirection(canopy_b), M_PI) * 180 / M_PI,
+                       -o.max_heading_deg, o.max_heading_deg)
+          : 0.0;
+
+  // Along: correlate the canopy profiles over the stretch both sides
+  // observe (all their sparse points: ground, canopy, next row), so that
+  // the row's ends and gaps must line up, not just the canopy's texture.
+  const Eigen::Isometry3d turn = BackToFrontTransform(heading_deg, 0, 0);
+  const std::vector<double> xf = Xs(canopy_f, Eigen::Isometry3d::Identity()), xb = Xs(canopy_b, turn);
+  const std::vector<double> seen_f = Xs(front.sparse, Eigen::Isometry3d::Identity()), seen_b = Xs(back.sparse, turn);
+  auto bin = [&](double x) { return static_cast<int>(std::floor(x / o.profile_bin)); };
+  const int f_lo = bin(Quantile(seen_f, 0.01)), f_hi = bin(Quantile(seen_f, 0.99)) + 1;
+  const int b_lo = bin(Quantile(seen_b, 0.01)), b_hi = bin(Quantile(seen_b, 0.99)) + 1;
+  const std::vector<double> pf = Profile(xf, f_lo, f_hi, o), pb = Profile(xb, b_lo, b_hi, o);
+  // Only offsets at which the two camera paths overlap by min_overlap of
+  // the shorter: both sides are meant to film the same stretch, and a row of
+  // evenly spaced trees looks alike one tree further on.
+  const std::vector<double> path_f = Xs(front.cameras, Eigen::Isometry3d::Identity()), path_b = Xs(back.cameras, turn);
+  const bool have_paths = !path_f.empty() && !path_b.empty();
+  double pf0 = 0, pf1 = 0, pb0 = 0, pb1 = 0;
+  if (have_paths) {
+    pf0 = *std::min_element(path_f.begin(), path_f.end()), pf1 = *std::max_element(path_f.begin(), path_f.end());
+    pb0 = *std::min_element(path_b.begin(), path_b.end()), pb1 = *std::max_element(path_b.begin(), path_b.end());
+  }
+  auto path_overlap = [&](double along) { return std::min(pf1, pb1 + along) - std::max(pf0, pb0 + along); };
+  const double shorter_path = std::min(pf1 - pf0, pb1 - pb0);
+  const int max_lag = static_cast<int>(std::ceil(o.max_along / o.profile_bin));
+  std::vector<double> corr(2 * max_lag + 1, -1);
+  int best = 0;
+  bool any = false;
+  for (int lag = -max_lag; lag <= max_lag; ++lag) {
+    if (have_paths && path_overlap(lag * o.profile_bin) < o.min_overlap * shorter_path) continue;
+    const int from = std::max(f_lo, b_lo + lag), to = std::min(f_hi, b_hi + lag);
+    corr[lag + max_lag] = Correlation(pf, f_lo, pb, b_lo, lag, from, to);
+    if (!any || corr[lag + max_lag] > corr[best + max_lag]) best = lag, any = true;
+  }
+  if (!any)
+    Fail("the two sides' camera paths cannot overlap by ", o.min_overlap,
+         " of the shorter within ", o.max_along, " m: they cover different stretches of the row");
+  const double correlation = corr[best + max_lag];
+  double chance_correlation = 0;
+  for (int lag = -max_lag; lag <= max_lag; ++lag)
+    if (std::abs(lag - best) * o.profile_bin >= 0.5) chance_correlation = std::max(chance_correlation, corr[lag + max_lag]);
+  if (correlation < o.min_correlation)
+    Fail("the two sides' canopy profiles along the row do not match (best correlation ", correlation, ", need ",
+         o.min_correlation, "): they do not show the same row, or not the same stretch of it");
+  double along = best * o.profile_bin;
+  // Sub-bin offset: a parabola through the peak and its neighbours.
+  if (best > -max_lag && best < max_lag && corr[best + max_lag - 1] > -1 && corr[best + max_lag + 1] > -1) {
+    const double c0 = corr[best + max_lag - 1], c1 = corr[best + max_lag], c2 = corr[best + max_lag + 1];
+    const double den = c0 - 2 * c1 + c2;
+    if (den < 0) along += 0.5 * (c0 - c2) / den * o.profile_bin;
+  }
+
+  // Across: the fruit both sides see, searched between the two canopy faces
+  // touching and max_thickness apart.
+  const double lo = std::max(face_f + face_b, 0.0), hi = lo + o.max_thickness;
+  RegistrationOptions ro;
+  ro.match_distance = o.match_distance;
+  Registration best_fit;
+  double best_soft = -1;
+  std::vector<std::pair<double, int>> by_across;  // across, matches
+  const int na = static_cast<int>(std::round(o.along_window / o.grid_step));
+  const int nc = static_cast<int>(std::ceil((hi - lo) / o.grid_step));
+  for (int j = 0; j <= nc; ++j) {
+    const double across = lo + j * o.grid_step;
+    int most = 0;
+    for (int i = -na; i <= na; ++i) {
+      const Registration e =
+          EvaluateAlignment(front, back, BackToFrontTransform(heading_deg, along + i * o.grid_step, across), ro);
+      most = std::max(most, e.matched);
+      // Ties (many cells match the same clusters): the cell closest to the
+      // matched centres, then the profile's along.
+      const double soft = e.matched - 0.5 * e.residual / o.match_distance - 1e-3 * std::abs(i);
+      if (e.matched > 0 && soft > best_soft) best_soft = soft, best_fit = e;
+    }
+    by_across.emplace_back(across, most);
+  }
+  int chance = 0;
+  for (const auto& [a, m] : by_across)
+    if (best_fit.matched > 0 && std::abs(a - best_fit.across) > 0.25) chance = std::max(chance, m);
+  double across;
+  bool assumed = false;
+  if (best_fit.matched >= o.min_matched && best_fit.matched >= o.min_distinctness * std::max(chance, 1)) {
+    along = best_fit.along, across = best_fit.across;
+  } else {
+    // Each side is assumed to see into the canopy up to the row's centre plane.
+    std::vector<double> yf, yb;
+    for (const auto& p : canopy_f) yf.push_back(p.y());
+    for (const auto& p : canopy_b) yb.push_back(p.y());
+    across = Quantile(yf, o.centre_quantile) + Quantile(yb, o.centre_quantile);
+    assumed = true;
+  }
+  Registration r = EvaluateAlignment(front, back, BackToFrontTransform(heading_deg, along, across), ro);
+  r.on_row = true, r.correlation = correlation, r.chance_correlation = chance_correlation;
+  r.across_assumed = assumed, r.chance_matched = chance;
+  // Overlap along the row: of the camera paths, or without them of the
+  // canopies.
+  std::vector<double> cb;
+  for (const auto& p : canopy_b) cb.push_back((r.back_to_front * p).x());
+  double f0 = Quantile(xf, 0.02), f1 = Quantile(xf, 0.98), b0 = Quantile(cb, 0.02), b1 = Quantile(cb, 0.98);
+  if (have_paths) f0 = pf0, f1 = pf1, b0 = pb0 + r.along, b1 = pb1 + r.along;
+  r.front_length = f1 - f0, r.back_length = b1 - b0;
+  r.overlap = std::max(0.0, std::min(f1, b1) - std::max(f0, b0));
+  if (r.overlap < o.min_overlap * std::min(r.front_length, r.back_length) - 1e-9)
+    Fail("the two sides cover different stretches of the row: they overlap by ", r.overlap, " m along the row (front ",
+         r.front_length, " m, back ", r.back_length, " m)");
+  return r;
+}
+
+}  // namespace orchard

@@ -1,0 +1,101 @@
+// Registration of the two sides on the row itself, for sides that share too
+// few detected fruit clusters for registration.h (the project's detectors
+// find about half of the apples, and few of the same ones from both sides).
+// Both sides are first levelled on the ground their sparse points show, so
+// that their ground planes coincide and their scales agree; the heading
+// comes from the canopy's direction in each row frame, the offset along the
+// row from correlating the two sides' canopy profiles (the row's ends and
+// gaps are seen from both sides), and the distance across from the fruit
+// clusters that both sides see, or, with too few, from an assumption (below).
+// The heading is kept at the half turn: each row frame's x axis is fitted to
+// its camera path, and the paths run along the row.
+// Needs COLMAP's sparse points on both sides (given poses come without).
+#pragma once
+
+#include <string>
+
+#include "orchard/merge/registration.h"
+#include "orchard/merge/side_cloud.h"
+
+namespace orchard {
+
+struct RowRegistrationOptions {
+  // The camera height (m) each side was scaled to (the side's
+  // --camera-height); the levelling keeps the cameras this high above the
+  // ground it finds.
+  double camera_height = 1.5;
+  // The ground is the lowest 5 cm slab of sparse points below the cameras
+  // holding this fraction of them, refined as a plane through the points
+  // within `ground_layer` (m) of it. The side's own fit can pick the canopy's
+  // lower edge instead (seed 11, back: 1.5 m too high, scale off 2x).
+  double min_ground_fraction = 0.02;
+  double ground_layer = 0.15;
+  // A side whose ground lies farther than this (m) from its z = 0, or tilted
+  // more than `max_ground_tilt_deg`, is re-levelled (and rescaled).
+  double max_ground_offset = 0.1;
+  double max_ground_tilt_deg = 1.0;
+  // Canopy: sparse points between these heights (m), from the nearest dense
+  // layer across the row (the face the camera sees) to `canopy_depth` (m)
+  // beyond it, which keeps the next row out.
+  double canopy_min_height = 0.3;
+  double canopy_max_height = 3.5;
+  double canopy_depth = 1.0;
+  int min_canopy_points = 100;
+  // Along-row profiles: bin (m), Gaussian smoothing (m), largest offset
+  // searched (m), and the correlation below which the two sides are taken as
+  // different rows or stretches.
+  double profile_bin = 0.05;
+  double profile_smoothing = 0.1;
+  double max_along = 4.0;
+  double min_correlation = 0.6;
+  // The sides' canopies must overlap along the row by this fraction of the
+  // shorter one.
+  double min_overlap = 0.5;
+  // Across: cluster centres closer than `match_distance` (m) are the same
+  // fruit; the search covers the along offset +- `along_window` (m) and the
+  // distance across from the two canopy faces' sum to `max_thickness` (m)
+  // beyond it, in `grid_step` (m). It takes the fruit's answer when it
+  // matches at least `min_matched` clusters and `min_distinctness` times as
+  // many as any alignment farther than 0.25 m across (seed 11 with the U-Net:
+  // 5 against 4 by chance, so not taken).
+  double match_distance = 0.08;
+  double along_window = 0.15;
+  double max_thickness = 3.0;
+  double grid_step = 0.01;
+  int min_matched = 3;
+  double min_distinctness = 2;
+  // Otherwise each side is assumed to see into the canopy up to the row's
+  // centre plane: the centre lies at this quantile of the side's canopy
+  // points' distances (chosen on seed 11, the one row with COLMAP runs:
+  // 0.95 puts the sides 1 cm from the truth, 0.9 20 cm short).
+  double centre_quantile = 0.95;
+  // Turn the back by the angle between the two sides' canopy lines instead
+  // of keeping the half turn (off: on seed 11 the lines' angle was 0.97 deg,
+  // the truth 0.10 deg).
+  bool heading_from_canopy = false;
+  double max_heading_deg = 8;
+  void Check() const;
+};
+
+// What the levelling did to one side.
+struct Levelling {
+  bool changed = false;
+  int ground_points = 0;     // sparse points in the ground layer
+  double ground_height = 0;  // the ground found, in the side's frame (m, below the cameras)
+  double tilt_deg = 0;       // its tilt against the side's ground plane
+  double scale = 1;          // applied to the side's coordinates
+  Eigen::Affine3d transform = Eigen::Affine3d::Identity();  // old row frame -> levelled one
+};
+
+// Finds the ground in the side's sparse points and, when it is not the
+// side's z = 0 plane, moves the side (sparse and fruit points) onto it:
+// level, the cameras `camera_height` above it. No-op without sparse points.
+Levelling LevelOnSparseGround(SideCloud* side, const RowRegistrationOptions& options);
+
+// Registers the (levelled) sides on the row. Throws orchard::Error with the
+// reason when a side has too few sparse canopy points, when the canopy
+// profiles do not correlate ("not the same row"), or when the sides cover
+// different stretches.
+Registration RegisterSidesOnRow(const SideCloud& front, const SideCloud& back, const RowRegistrationOptions& options);
+
+}  // namespace orchard
