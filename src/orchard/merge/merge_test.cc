@@ -190,7 +190,7 @@ TEST(RowRegistrationTest, RecoversKnownTransformsWithoutSharedFruit) {
     // of a 0.6 m band falls 3 cm short of it on each side.
     EXPECT_TRUE(r.across_assumed);
     EXPECT_NEAR(r.across, across - 0.06, 0.03);
-    EXPECT_GT(r.correlation, 0.8);
+    EXPECT_GT(r.correlation, 0.9);
     EXPECT_GT(r.overlap, 3.5);  // the camera paths: 0..3.75 m
   }
   // A path not quite parallel (0.5 deg): the half turn is kept, so the

@@ -43,11 +43,12 @@ struct RowRegistrationOptions {
   int min_canopy_points = 100;
   // Along-row profiles: bin (m), Gaussian smoothing (m), largest offset
   // searched (m), and the correlation below which the two sides are taken as
-  // different rows or stretches.
+  // different rows or stretches (seed 11's two sides: 0.95; the front of
+  // seed 11 with the back of seed 12, a row of the same layout: 0.82).
   double profile_bin = 0.05;
   double profile_smoothing = 0.1;
   double max_along = 4.0;
-  double min_correlation = 0.6;
+  double min_correlation = 0.9;
   // The sides' canopies must overlap along the row by this fraction of the
   // shorter one.
   double min_overlap = 0.5;
