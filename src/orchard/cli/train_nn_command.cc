@@ -25,6 +25,11 @@ void AddTrainerOptions(CLI::App* cmd, nn::TrainerOptions* trainer, std::string* 
       ->capture_default_str();
   cmd->add_option("--seed", trainer->seed, "Seed of initialisation, shuffling and augmentation")->capture_default_str();
   cmd->add_option("--threads", trainer->threads, "LibTorch threads (0 = all cores)")->capture_default_str();
+  cmd->add_option("--ema", trainer->ema_decay,
+                  "Validate and save an exponential moving average of the weights with this decay per step (0 = off)")
+      ->capture_default_str();
+  cmd->add_flag("--cosine-lr", trainer->cosine_lr,
+               "Decay the learning rate along a half cosine from its initial value to 0 at the last epoch");
   cmd->add_option("--state", *state_dir, "Folder for resumable training state: rerun with it to resume");
 }
 
@@ -61,6 +66,10 @@ void AddTrainNetworkCommands(CLI::App& app) {
   counter->add_option("--input", c->options.input_size, "Input side in pixels (paper: 224)")->capture_default_str();
   counter->add_option("--lr", c->options.learning_rate, "Adam learning rate")->capture_default_str();
   counter->add_option("--val-fraction", c->options.validation_fraction, "Fraction of training photos for validation")
+      ->capture_default_str();
+  counter->add_option("--copy-paste", c->options.copy_paste.probability,
+                      "Probability that a drawn 1..6-apple sample is replaced by a composite of real single apples "
+                      "pasted on real background of one training photo (0 = off)")
       ->capture_default_str();
   counter->add_option("--background", c->patch_options.background_per_image, "Background patches per image")
       ->capture_default_str();

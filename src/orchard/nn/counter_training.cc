@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <map>
+#include <memory>
 #include <regex>
 #include <set>
 
@@ -15,12 +16,15 @@ namespace {
 
 constexpr int kClasses = 7;
 
+double Uniform01(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * (1.0 / 9007199254740992.0); }
+
 class CounterTask : public TrainingTask {
  public:
   CounterTask(ResNet net, const CounterTrainingOptions& options, std::vector<cv::Mat> train_images,
               std::vector<int> train_labels, std::vector<cv::Mat> val_images, std::vector<int> val_labels,
-              std::function<void()> save_best)
+              const CopyPasteSource* copy_paste, std::function<void()> save_best)
       : net_(net),
+        copy_paste_(copy_paste),
         options_(options),
         train_images_(std::move(train_images)),
         train_labels_(std::move(train_labels)),
@@ -42,8 +46,14 @@ class CounterTask : public TrainingTask {
     std::vector<int64_t> labels;
     for (size_t i : indices) {
       const size_t sample = balanced_[i];
-      images.push_back(AugmentPatch(train_images_[sample], options_.augmentation, rng));
-      labels.push_back(train_labels_[sample]);
+      const int label = train_labels_[sample];
+      if (copy_paste_ && label >= 1 && Uniform01(rng) < options_.copy_paste.probability) {
+        images.push_back(
+            AugmentPatch(LetterboxPatch(copy_paste_->Compose(label, rng), options_.input_size), options_.augmentation, rng));
+      } else {
+        images.push_back(AugmentPatch(train_images_[sample], options_.augmentation, rng));
+      }
+      labels.push_back(label);
     }
     return torch::cross_entropy_loss(net_->forward(ImagesToTensor(images)), torch::tensor(labels, torch::kLong));
   }
@@ -63,6 +73,7 @@ class CounterTask : public TrainingTask {
 
  private:
   ResNet net_;
+  const CopyPasteSource* copy_paste_;  // null when copy-paste is off
   const CounterTrainingOptions& options_;
   std::vector<cv::Mat> train_images_;
   std::vector<int> train_labels_;
@@ -117,6 +128,7 @@ std::vector<LabelledPatch> CutDatasetPatches(const Dataset& dataset, const Count
 void CounterTrainingOptions::Check() const {
   architecture.Check();
   trainer.Check();
+  copy_paste.Check();
   ORCHARD_CHECK_OPTION(architecture.num_classes == kClasses, "the counter has 7 classes (0..6), got ",
                        architecture.num_classes);
   ORCHARD_CHECK_OPTION(input_size >= 32 && input_size <= 512, "input size must be in [32, 512], got ", input_size);
@@ -136,8 +148,9 @@ CounterTrainingResult TrainCounter(const std::vector<LabelledPatch>& patches, co
 
   CounterTrainingResult result;
   result.train_class_counts.assign(kClasses, 0);
-  std::vector<cv::Mat> train_images, val_images;
+  std::vector<cv::Mat> train_images, val_images, train_originals;
   std::vector<int> train_labels, val_labels;
+  std::vector<std::string> train_photos;
   for (const LabelledPatch& p : patches) {
     cv::Mat input = LetterboxPatch(p.bgr, options.input_size);
     if (val_photos.count(p.photo)) {
@@ -146,8 +159,15 @@ CounterTrainingResult TrainCounter(const std::vector<LabelledPatch>& patches, co
     } else {
       train_images.push_back(input);
       train_labels.push_back(p.count);
+      train_originals.push_back(p.bgr);
+      train_photos.push_back(p.photo);
       ++result.train_class_counts[p.count];
     }
+  }
+  std::unique_ptr<CopyPasteSource> copy_paste;
+  if (options.copy_paste.probability > 0) {
+    copy_paste = std::make_unique<CopyPasteSource>(train_originals, train_labels, train_photos, options.copy_paste);
+    if (copy_paste->empty()) Fail("copy-paste needs training photos with background and single-apple patches");
   }
   if (train_images.empty() || val_images.empty()) {
     Fail("training and validation each need patches from at least one photo: give patches from more photos");
@@ -163,11 +183,13 @@ CounterTrainingResult TrainCounter(const std::vector<LabelledPatch>& patches, co
                            {"data", data_description},
                            {"train_patches", result.train_patches},
                            {"validation_patches", result.validation_patches},
-                           {"train_class_counts", result.train_class_counts}};
+                           {"train_class_counts", result.train_class_counts},
+                           {"copy_paste_probability", options.copy_paste.probability},
+                           {"ema_decay", options.trainer.ema_decay}};
   BestCheckpoint best(model_path);
   auto save_best = [&] { best.Save(*net, header); };
   CounterTask task(net, options, std::move(train_images), std::move(train_labels), std::move(val_images),
-                   std::move(val_labels), save_best);
+                   std::move(val_labels), copy_paste.get(), save_best);
   torch::optim::Adam adam(net->parameters(),
                           torch::optim::AdamOptions(options.learning_rate).betas(std::make_tuple(0.9, 0.999)));
   result.record = Train(task, *net, adam, options.trainer);

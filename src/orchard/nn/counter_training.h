@@ -12,6 +12,7 @@
 
 #include "orchard/data/count_patches.h"
 #include "orchard/data/dataset.h"
+#include "orchard/nn/copy_paste.h"
 #include "orchard/nn/models.h"
 #include "orchard/nn/patch_input.h"
 #include "orchard/nn/trainer.h"
@@ -48,6 +49,8 @@ struct CounterTrainingOptions {
   double validation_fraction = 0.2;
   uint64_t split_seed = 1;
   PatchAugmentation augmentation;
+  // Composites of real single apples on real background (training photos only).
+  CopyPasteOptions copy_paste;
   TrainerOptions trainer;  // defaults: 50 epochs, patience 5
 
   void Check() const;

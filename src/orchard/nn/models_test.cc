@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <sstream>
 
 #include "orchard/core/error.h"
 #include "orchard/nn/checkpoint.h"
@@ -104,6 +105,79 @@ TEST(Trainer, LossFallsAndResumes) {
   EXPECT_EQ(resumed.epochs_run, 7);
   EXPECT_EQ(resumed.train_loss.size(), 7u);
   EXPECT_DOUBLE_EQ(resumed.train_loss[0], record.train_loss[0]);
+}
+
+TEST(Trainer, WeightAverageArithmetic) {
+  torch::nn::BatchNorm1d bn(1);
+  torch::NoGradGuard no_grad;
+  bn->weight.fill_(1.0);
+  bn->running_mean.fill_(0.0);
+  WeightAverage average(*bn, 0.5);
+  // First update: the decay warms up to min(0.5, 1 / 10) = 0.1.
+  bn->weight.fill_(3.0);
+  bn->running_mean.fill_(2.0);
+  bn->num_batches_tracked.fill_(7);
+  average.Update();
+  // Second update: min(0.5, 2 / 11) = 2 / 11.
+  bn->weight.fill_(5.0);
+  average.Update();
+  EXPECT_EQ(average.updates(), 2);
+  const double w1 = 0.1 * 1.0 + 0.9 * 3.0;
+  const double d2 = 2.0 / 11.0;
+  average.Swap();
+  EXPECT_NEAR(bn->weight.item<double>(), d2 * w1 + (1 - d2) * 5.0, 1e-6);
+  EXPECT_NEAR(bn->running_mean.item<double>(), d2 * (0.9 * 2.0) + (1 - d2) * 2.0, 1e-6);  // buffers averaged too
+  EXPECT_EQ(bn->num_batches_tracked.item<int64_t>(), 7);                                  // integer buffers copied
+  average.Swap();  // back to the live weights
+  EXPECT_DOUBLE_EQ(bn->weight.item<double>(), 5.0);
+  // Saved and loaded, the average is the same.
+  torch::serialize::OutputArchive out;
+  average.Save(out);
+  std::ostringstream bytes;
+  out.save_to(bytes);
+  WeightAverage reloaded(*bn, 0.5);
+  torch::serialize::InputArchive in;
+  std::istringstream read(bytes.str());
+  in.load_from(read);
+  reloaded.Load(in);
+  EXPECT_EQ(reloaded.updates(), 2);
+  reloaded.Swap();
+  EXPECT_NEAR(bn->weight.item<double>(), d2 * w1 + (1 - d2) * 5.0, 1e-6);
+}
+
+TEST(Trainer, WeightAverageTrainsAndResumes) {
+  TrainerOptions options;
+  options.max_epochs = 3;
+  options.patience = 100;
+  options.batch_size = 8;
+  options.progress = false;
+  options.ema_decay = 0.9;
+  options.state_dir = TempDir("resume_ema");
+  SetUpTorch(options);
+  ResNet net(ResNetOptions{18, 4, 1, 2});
+  HalvesTask task(net);
+  torch::optim::Adam adam(net->parameters(), torch::optim::AdamOptions(1e-2));
+  TrainingRecord record = Train(task, *net, adam, options);
+  ASSERT_EQ(record.epochs_run, 3);
+  EXPECT_TRUE(fs::exists(options.state_dir / "ema.pt"));
+  options.max_epochs = 4;
+  EXPECT_EQ(Train(task, *net, adam, options).epochs_run, 4);
+}
+
+TEST(Trainer, CosineLearningRate) {
+  TrainerOptions options;
+  options.max_epochs = 4;
+  options.patience = 100;
+  options.batch_size = 16;
+  options.progress = false;
+  options.cosine_lr = true;
+  SetUpTorch(options);
+  ResNet net(ResNetOptions{18, 4, 1, 2});
+  HalvesTask task(net);
+  torch::optim::Adam adam(net->parameters(), torch::optim::AdamOptions(1e-2));
+  Train(task, *net, adam, options);
+  // The last epoch (4 of 4) ran at 1e-2 * 0.5 (1 + cos(3 pi / 4)).
+  EXPECT_NEAR(adam.param_groups()[0].options().get_lr(), 1e-2 * 0.5 * (1 + std::cos(3 * M_PI / 4)), 1e-12);
 }
 
 TEST(Checkpoint, ReloadGivesIdenticalOutputsAndRejectsMismatch) {

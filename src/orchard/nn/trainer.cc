@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <memory>
 #include <cstdio>
 #include <numeric>
 #include <thread>
@@ -24,8 +26,13 @@ void PrintProgress(int epoch, int max_epochs, size_t done, size_t total, double 
 }
 
 void SaveState(const fs::path& dir, torch::nn::Module& model, torch::optim::Optimizer& optimizer,
-               const TrainingRecord& record, const std::mt19937_64& rng) {
+               const TrainingRecord& record, const std::mt19937_64& rng, const WeightAverage* average) {
   fs::create_directories(dir);
+  if (average) {
+    torch::serialize::OutputArchive average_archive;
+    average->Save(average_archive);
+    WriteFileAtomic(dir / "ema.pt", [&](const fs::path& tmp) { average_archive.save_to(tmp.string()); });
+  }
   torch::serialize::OutputArchive model_archive;
   model.save(model_archive);
   WriteFileAtomic(dir / "model.pt", [&](const fs::path& tmp) { model_archive.save_to(tmp.string()); });
@@ -60,13 +67,73 @@ bool LoadState(const fs::path& dir, torch::nn::Module& model, torch::optim::Opti
   return true;
 }
 
+// The average of a resumed run; a state written without one restarts it from the loaded weights.
+void LoadAverage(const fs::path& dir, WeightAverage* average) {
+  if (!fs::exists(dir / "ema.pt")) return;
+  try {
+    torch::serialize::InputArchive archive;
+    archive.load_from((dir / "ema.pt").string());
+    average->Load(archive);
+  } catch (const std::exception& e) {
+    Fail("cannot resume the weight average from ", dir.string(), ": ", std::string(e.what()).substr(0, 200));
+  }
+}
+
 }  // namespace
+
+WeightAverage::WeightAverage(torch::nn::Module& model, double decay) : decay_(decay) {
+  torch::NoGradGuard no_grad;
+  for (const torch::Tensor& p : model.parameters()) live_.push_back(p);
+  for (const torch::Tensor& b : model.buffers()) live_.push_back(b);
+  for (const torch::Tensor& t : live_) average_.push_back(t.detach().clone());
+}
+
+void WeightAverage::Update() {
+  torch::NoGradGuard no_grad;
+  const double decay = std::min(decay_, (1.0 + updates_) / (10.0 + updates_));
+  for (size_t i = 0; i < live_.size(); ++i) {
+    if (average_[i].is_floating_point()) {
+      average_[i].mul_(decay).add_(live_[i].detach(), 1.0 - decay);
+    } else {
+      average_[i].copy_(live_[i]);
+    }
+  }
+  ++updates_;
+}
+
+void WeightAverage::Swap() {
+  torch::NoGradGuard no_grad;
+  for (size_t i = 0; i < live_.size(); ++i) {
+    torch::Tensor held = live_[i].detach().clone();
+    live_[i].detach().copy_(average_[i]);
+    average_[i].copy_(held);
+  }
+}
+
+void WeightAverage::Save(torch::serialize::OutputArchive& archive) const {
+  for (size_t i = 0; i < average_.size(); ++i) archive.write("t" + std::to_string(i), average_[i]);
+  archive.write("updates", torch::tensor(updates_, torch::kLong));
+}
+
+void WeightAverage::Load(torch::serialize::InputArchive& archive) {
+  torch::NoGradGuard no_grad;
+  for (size_t i = 0; i < average_.size(); ++i) {
+    torch::Tensor t;
+    archive.read("t" + std::to_string(i), t);
+    if (!t.sizes().equals(average_[i].sizes())) Fail("weight average does not match the model");
+    average_[i].copy_(t);
+  }
+  torch::Tensor updates;
+  archive.read("updates", updates);
+  updates_ = updates.item<int64_t>();
+}
 
 void TrainerOptions::Check() const {
   ORCHARD_CHECK_OPTION(max_epochs >= 1, "max epochs must be at least 1, got ", max_epochs);
   ORCHARD_CHECK_OPTION(patience >= 1, "patience must be at least 1, got ", patience);
   ORCHARD_CHECK_OPTION(batch_size >= 1, "batch size must be at least 1, got ", batch_size);
   ORCHARD_CHECK_OPTION(threads >= 0, "threads must be >= 0 (0 = all cores), got ", threads);
+  ORCHARD_CHECK_OPTION(ema_decay >= 0 && ema_decay < 1, "weight-average decay must be in [0, 1), got ", ema_decay);
 }
 
 nlohmann::json TrainingRecord::ToJson() const {
@@ -100,9 +167,18 @@ TrainingRecord Train(TrainingTask& task, torch::nn::Module& model, torch::optim:
   const bool tty = options.progress && ::isatty(2);
   std::mt19937_64 rng(options.seed);
   TrainingRecord record;
-  if (!options.state_dir.empty() && LoadState(options.state_dir, model, optimizer, &record, &rng)) {
+  // The optimiser's learning rates as built: a resumed state holds the decayed ones.
+  std::vector<double> initial_lr;
+  for (const auto& group : optimizer.param_groups()) initial_lr.push_back(group.options().get_lr());
+  const bool resumed = !options.state_dir.empty() && LoadState(options.state_dir, model, optimizer, &record, &rng);
+  if (resumed) {
     std::fprintf(stderr, "resuming after epoch %d (best %s %.4f at epoch %d)\n", record.epochs_run,
                  task.MetricName().c_str(), record.best_metric, record.best_epoch);
+  }
+  std::unique_ptr<WeightAverage> average;
+  if (options.ema_decay > 0) {
+    average = std::make_unique<WeightAverage>(model, options.ema_decay);
+    if (resumed) LoadAverage(options.state_dir, average.get());
   }
   const auto start = std::chrono::steady_clock::now();
   std::vector<size_t> order(task.NumTrain());
@@ -113,6 +189,10 @@ TrainingRecord Train(TrainingTask& task, torch::nn::Module& model, torch::optim:
     std::shuffle(order.begin(), order.end(), rng);
     const size_t epoch_size =
         options.samples_per_epoch > 0 ? std::min(order.size(), options.samples_per_epoch) : order.size();
+    if (options.cosine_lr) {
+      const double factor = 0.5 * (1 + std::cos(M_PI * (epoch - 1) / options.max_epochs));
+      for (size_t g = 0; g < initial_lr.size(); ++g) optimizer.param_groups()[g].options().set_lr(initial_lr[g] * factor);
+    }
     model.train();
     double loss_sum = 0;
     size_t batches = 0;
@@ -124,11 +204,14 @@ TrainingRecord Train(TrainingTask& task, torch::nn::Module& model, torch::optim:
       if (!std::isfinite(loss.item<double>())) Fail("training diverged: the loss is not finite at epoch ", epoch);
       loss.backward();
       optimizer.step();
+      if (average) average->Update();
       loss_sum += loss.item<double>();
       ++batches;
       PrintProgress(epoch, options.max_epochs, end, epoch_size, loss_sum / batches, tty);
     }
     model.eval();
+    // The average is validated and, when best, saved; training continues from the live weights.
+    if (average) average->Swap();
     double metric;
     {
       torch::NoGradGuard no_grad;
@@ -143,6 +226,7 @@ TrainingRecord Train(TrainingTask& task, torch::nn::Module& model, torch::optim:
       record.best_epoch = epoch;
       task.SaveBest();
     }
+    if (average) average->Swap();
     if (epoch - record.best_epoch >= options.patience) record.stopped_early = true;
     if (options.progress) {
       if (tty) std::fputc('\r', stderr);
@@ -150,7 +234,7 @@ TrainingRecord Train(TrainingTask& task, torch::nn::Module& model, torch::optim:
                    task.MetricName().c_str(), metric, improved ? " (best)" : "");
     }
     record.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (!options.state_dir.empty()) SaveState(options.state_dir, model, optimizer, record, rng);
+    if (!options.state_dir.empty()) SaveState(options.state_dir, model, optimizer, record, rng, average.get());
   }
   record.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return record;

@@ -29,6 +29,14 @@ struct TrainerOptions {
   // empty = no resume. A run with the same folder continues where it stopped.
   fs::path state_dir;
   bool progress = true;  // progress bar on stderr
+  // Exponential moving average of the weights and BatchNorm statistics,
+  // updated after every step; the average is what is validated and saved.
+  // 0 = off. Smooths the epoch-to-epoch swings of the validation metric that
+  // make the early-stopping pick noisy (a decay of 0.998 averages ~500 steps).
+  double ema_decay = 0;
+  // Learning rate of epoch e (1-based) = initial * 0.5 (1 + cos(pi (e - 1) / max_epochs)):
+  // large steps first, small ones at the end, where the best epochs are.
+  bool cosine_lr = false;
 
   void Check() const;
 };
@@ -60,6 +68,27 @@ struct TrainingRecord {
 
   nlohmann::json ToJson() const;
   static TrainingRecord FromJson(const nlohmann::json& json);
+};
+
+// The moving average of a model's parameters and buffers (trainer.h's
+// ema_decay). Floating-point tensors are averaged, integer buffers (BatchNorm's
+// batch counter) copied. The decay warms up as min(decay, (1 + t) / (10 + t))
+// after t updates, so the first steps' random weights fade quickly.
+class WeightAverage {
+ public:
+  WeightAverage(torch::nn::Module& model, double decay);
+  void Update();
+  // Exchanges the model's tensors with the averages (call again to undo).
+  void Swap();
+  int64_t updates() const { return updates_; }
+  void Save(torch::serialize::OutputArchive& archive) const;
+  void Load(torch::serialize::InputArchive& archive);
+
+ private:
+  std::vector<torch::Tensor> live_;     // the model's parameters and buffers
+  std::vector<torch::Tensor> average_;  // their averages, same order
+  double decay_;
+  int64_t updates_ = 0;
 };
 
 // Uses options.threads cores and seeds LibTorch; call before building a model
