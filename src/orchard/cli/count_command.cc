@@ -46,6 +46,11 @@ void AddCountCommand(CLI::App& app) {
   cmd->add_option("--model", args->counter.model,
                   "cnn: counter model .pt (default: the shipped models/counter.pt); gmm: colour model json that "
                   "finds the fruit pixels of patches (needed with --in)");
+  cmd->add_flag("!--no-flip-average", args->counter.cnn.flip_average,
+               "cnn: one pass per patch instead of averaging it with its mirror image");
+  cmd->add_option("--prior-weight", args->counter.cnn.prior_weight,
+                  "cnn: weigh the counts by the training frequencies to this power (0 = off, 1 = Bayes' rule)")
+      ->capture_default_str();
   cmd->add_option("--criterion", args->criterion, "gmm model selection: coverage (fruit discs cover the blob), bic or aic")->capture_default_str();
   cmd->add_option("--max-fruits", args->counter.gmm.max_fruits, "Largest count per blob")->capture_default_str();
   cmd->add_option("--min-separation", args->counter.gmm.min_separation,

@@ -1,5 +1,7 @@
 #include "orchard/count/cnn_counter.h"
 
+#include <algorithm>
+#include <cmath>
 #include <thread>
 
 #include "orchard/core/error.h"
@@ -12,13 +14,31 @@ namespace orchard {
 struct CnnCounter::Impl {
   nn::ResNet net{nullptr};
   int input_size = 64;
+  CnnCounterOptions options;
+  torch::Tensor prior;  // [1, classes] factors, undefined when prior_weight is 0
 };
 
-CnnCounter::CnnCounter(const std::filesystem::path& model_path, int threads) : impl_(std::make_unique<Impl>()) {
+void CnnCounterOptions::Check() const {
+  ORCHARD_CHECK_OPTION(prior_weight >= 0 && prior_weight <= 1, "prior weight must be in [0, 1], got ", prior_weight);
+}
+
+CnnCounter::CnnCounter(const std::filesystem::path& model_path, int threads, const CnnCounterOptions& options)
+    : impl_(std::make_unique<Impl>()) {
+  options.Check();
+  impl_->options = options;
   const nlohmann::json header = nn::ReadCheckpointHeader(model_path, "counter");
   try {
     impl_->net = nn::ResNet(nn::ResNetOptions::FromJson(header.at("architecture")));
     impl_->input_size = header.at("input_size").get<int>();
+    if (options.prior_weight > 0) {
+      if (!header.contains("train_class_counts")) Fail("model file ", model_path.string(), " has no class counts for the prior");
+      std::vector<double> counts = header.at("train_class_counts").get<std::vector<double>>();
+      double total = 0;
+      for (double& c : counts) total += c = std::max(c, 1.0);  // a count never seen still gets a chance
+      std::vector<float> factors;
+      for (double c : counts) factors.push_back(static_cast<float>(std::pow(c / total, options.prior_weight)));
+      impl_->prior = torch::tensor(factors).unsqueeze(0);
+    }
   } catch (const nlohmann::json::exception&) {
     Fail("model file ", model_path.string(), " has an incomplete counter header");
   }
@@ -31,15 +51,35 @@ CnnCounter::~CnnCounter() = default;
 
 int CnnCounter::input_size() const { return impl_->input_size; }
 
-std::vector<int> CnnCounter::CountBatch(const std::vector<cv::Mat>& bgr_patches) {
-  std::vector<int> counts;
+std::vector<std::vector<float>> CnnCounter::CountProbabilities(const std::vector<cv::Mat>& bgr_patches) {
+  std::vector<std::vector<float>> probabilities;
   torch::NoGradGuard no_grad;
   for (size_t begin = 0; begin < bgr_patches.size(); begin += 64) {
     const size_t end = std::min(bgr_patches.size(), begin + 64);
     std::vector<cv::Mat> inputs;
     for (size_t i = begin; i < end; ++i) inputs.push_back(nn::LetterboxPatch(bgr_patches[i], impl_->input_size));
-    torch::Tensor predicted = impl_->net->forward(nn::ImagesToTensor(inputs)).argmax(1);
-    for (size_t i = 0; i < inputs.size(); ++i) counts.push_back(static_cast<int>(predicted[i].item<int64_t>()));
+    const torch::Tensor x = nn::ImagesToTensor(inputs);
+    torch::Tensor p = torch::softmax(impl_->net->forward(x), 1);
+    // Mirroring the letterboxed input is what training's flip augmentation does.
+    if (impl_->options.flip_average) p = 0.5 * (p + torch::softmax(impl_->net->forward(torch::flip(x, {3})), 1));
+    if (impl_->prior.defined()) {
+      if (impl_->prior.size(1) != p.size(1)) Fail("class counts of the prior do not match the model's classes");
+      p = p * impl_->prior;
+      p = p / p.sum(1, true);
+    }
+    p = p.contiguous();
+    for (int64_t i = 0; i < p.size(0); ++i) {
+      const float* row = p[i].data_ptr<float>();
+      probabilities.emplace_back(row, row + p.size(1));
+    }
+  }
+  return probabilities;
+}
+
+std::vector<int> CnnCounter::CountBatch(const std::vector<cv::Mat>& bgr_patches) {
+  std::vector<int> counts;
+  for (const std::vector<float>& p : CountProbabilities(bgr_patches)) {
+    counts.push_back(static_cast<int>(std::max_element(p.begin(), p.end()) - p.begin()));
   }
   return counts;
 }

@@ -11,6 +11,7 @@
 #include "orchard/core/file_io.h"
 #include "orchard/nn/checkpoint.h"
 #include "orchard/nn/counter_training.h"
+#include "orchard/nn/models.h"
 #include "orchard/core/test_util.h"
 
 namespace orchard {
@@ -65,6 +66,69 @@ TEST(CnnCounter, TrainsReloadsAndCounts) {
   CnnCounter again(dir / "counter.pt", 1);
   EXPECT_EQ(again.CountBatch(test), counts);
   EXPECT_EQ(again.Count(test[4], cv::Mat1b()).count, counts[4]);
+}
+
+TEST(CnnCounter, FlipAverageIsMirrorInvariant) {
+  const fs::path dir = TempDir("flip");
+  torch::manual_seed(2);
+  nn::ResNet net(nn::ResNetOptions{18, 4, 3, 7});
+  nn::SaveCheckpoint(*net, {{"kind", "counter"}, {"architecture", net->options().ToJson()}, {"input_size", 32}},
+                     dir / "counter.pt");
+  std::mt19937_64 rng(9);
+  std::vector<cv::Mat> patches, mirrored;
+  for (int i = 0; i < 6; ++i) {
+    // Even padding (width 40 -> 32 x 26, 3 px each side) so mirroring commutes with the letterbox.
+    cv::Mat patch(33, 40, CV_8UC3);
+    cv::randu(patch, 0, 255);
+    patches.push_back(patch);
+    cv::Mat flipped;
+    cv::flip(patch, flipped, 1);
+    mirrored.push_back(flipped);
+  }
+  CnnCounter averaged(dir / "counter.pt", 1);
+  const auto p = averaged.CountProbabilities(patches);
+  const auto q = averaged.CountProbabilities(mirrored);
+  for (size_t i = 0; i < p.size(); ++i) {
+    ASSERT_EQ(p[i].size(), 7u);
+    for (int k = 0; k < 7; ++k) EXPECT_NEAR(p[i][k], q[i][k], 1e-6) << "patch " << i << " count " << k;
+  }
+  // Without averaging, a random network tells a patch from its mirror; for a
+  // mirror-symmetric patch both settings agree.
+  CnnCounter single(dir / "counter.pt", 1, CnnCounterOptions{false});
+  const auto r = single.CountProbabilities(patches);
+  const auto t = single.CountProbabilities(mirrored);
+  double differ = 0;
+  for (size_t i = 0; i < r.size(); ++i)
+    for (int k = 0; k < 7; ++k) differ = std::max<double>(differ, std::abs(r[i][k] - t[i][k]));
+  EXPECT_GT(differ, 1e-4);
+  cv::Mat symmetric = patches[0].clone();
+  cv::Mat left = symmetric(cv::Rect(0, 0, 20, 33)), right;
+  cv::flip(left, right, 1);
+  right.copyTo(symmetric(cv::Rect(20, 0, 20, 33)));
+  const auto a = averaged.CountProbabilities({symmetric});
+  const auto b = single.CountProbabilities({symmetric});
+  for (int k = 0; k < 7; ++k) EXPECT_NEAR(a[0][k], b[0][k], 1e-6);
+}
+
+TEST(CnnCounter, PriorWeightMultipliesByClassFrequencies) {
+  const fs::path dir = TempDir("prior");
+  torch::manual_seed(3);
+  nn::ResNet net(nn::ResNetOptions{18, 4, 3, 7});
+  const std::vector<int> class_counts{10, 40, 20, 10, 0, 10, 10};
+  nn::SaveCheckpoint(*net,
+                     {{"kind", "counter"}, {"architecture", net->options().ToJson()}, {"input_size", 32},
+                      {"train_class_counts", class_counts}},
+                     dir / "counter.pt");
+  cv::Mat patch(30, 30, CV_8UC3);
+  cv::randu(patch, 0, 255);
+  const auto plain = CnnCounter(dir / "counter.pt", 1, CnnCounterOptions{false, 0.0}).CountProbabilities({patch})[0];
+  const auto weighted = CnnCounter(dir / "counter.pt", 1, CnnCounterOptions{false, 0.5}).CountProbabilities({patch})[0];
+  // p'(k) is p(k) sqrt(n_k) renormalised; an unseen count is weighted as seen once.
+  std::vector<double> expected;
+  double sum = 0;
+  for (int k = 0; k < 7; ++k) sum += expected.emplace_back(plain[k] * std::sqrt(std::max(1, class_counts[k])));
+  for (int k = 0; k < 7; ++k) EXPECT_NEAR(weighted[k], expected[k] / sum, 1e-5) << "count " << k;
+  EXPECT_THROW(CnnCounter(dir / "counter.pt", 1, CnnCounterOptions{false, 2.0}), Error);
 }
 
 TEST(CnnCounter, RejectsWrongFiles) {

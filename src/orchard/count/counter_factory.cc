@@ -16,7 +16,8 @@ std::filesystem::path DefaultCounterModel() { return DefaultModelsDir() / "count
 std::unique_ptr<Counter> MakeCounter(const CounterChoice& choice) {
   choice.Check();
   if (choice.method == "cnn") {
-    return std::make_unique<CnnCounter>(choice.model.empty() ? DefaultCounterModel() : choice.model, choice.threads);
+    return std::make_unique<CnnCounter>(choice.model.empty() ? DefaultCounterModel() : choice.model, choice.threads,
+                                        choice.cnn);
   }
   std::shared_ptr<const ColourModel> colour;
   if (!choice.model.empty()) colour = std::make_shared<ColourModel>(ReadColourModel(choice.model));

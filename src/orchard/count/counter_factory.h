@@ -5,6 +5,7 @@
 #include <memory>
 #include <string>
 
+#include "orchard/count/cnn_counter.h"
 #include "orchard/count/counter.h"
 #include "orchard/count/gmm_counter.h"
 
@@ -16,6 +17,7 @@ struct CounterChoice {
   // optional colour model json that finds fruit pixels in patches given
   // without a mask.
   std::filesystem::path model;
+  CnnCounterOptions cnn;
   GmmCounterOptions gmm;
   int threads = 0;  // 0 = all cores
 
