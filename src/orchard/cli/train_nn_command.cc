@@ -9,6 +9,7 @@
 #include "orchard/core/error.h"
 #include "orchard/data/count_patches.h"
 #include "orchard/data/dataset.h"
+#include "orchard/nn/counter_ensemble.h"
 #include "orchard/nn/counter_training.h"
 #include "orchard/nn/segmentation_training.h"
 
@@ -94,6 +95,18 @@ void AddTrainNetworkCommands(CLI::App& app) {
     spdlog::info("wrote {}: {} training / {} validation patches, best val accuracy {:.4f} at epoch {} of {} ({:.0f} s)",
                  c->out, result.train_patches, result.validation_patches, result.record.best_metric,
                  result.record.best_epoch, result.record.epochs_run, result.record.seconds);
+  });
+
+  // ---- counter ensemble ----
+  CLI::App* ensemble = train->add_subcommand(
+      "counter-ensemble", "One counter file from several trained counters, whose probabilities are averaged");
+  auto e = std::make_shared<std::pair<std::vector<std::string>, std::string>>();
+  ensemble->add_option("--model", e->first, "Counter model file (.pt) from `orchard train counter` (repeatable)")
+      ->required();
+  ensemble->add_option("--out", e->second, "Ensemble model file to write (.pt)")->required();
+  ensemble->callback([e]() {
+    nn::WriteCounterEnsemble(std::vector<fs::path>(e->first.begin(), e->first.end()), e->second);
+    spdlog::info("wrote {}: {} counters", e->second, e->first.size());
   });
 
   // ---- unet ----

@@ -6,14 +6,16 @@
 
 #include "orchard/core/error.h"
 #include "orchard/nn/checkpoint.h"
+#include "orchard/nn/counter_ensemble.h"
 #include "orchard/nn/models.h"
 #include "orchard/nn/patch_input.h"
 
 namespace orchard {
 
 struct CnnCounter::Impl {
-  nn::ResNet net{nullptr};
-  int input_size = 64;
+  std::vector<nn::ResNet> nets;
+  std::vector<int> input_sizes;
+  nn::CounterEnsemble ensemble{nullptr};  // holds the nets of an ensemble file
   CnnCounterOptions options;
   torch::Tensor prior;  // [1, classes] factors, undefined when prior_weight is 0
 };
@@ -27,41 +29,57 @@ CnnCounter::CnnCounter(const std::filesystem::path& model_path, int threads, con
   options.Check();
   impl_->options = options;
   const nlohmann::json header = nn::ReadCheckpointHeader(model_path, "counter");
+  std::vector<nn::CounterMember> members;
   try {
-    impl_->net = nn::ResNet(nn::ResNetOptions::FromJson(header.at("architecture")));
-    impl_->input_size = header.at("input_size").get<int>();
-    if (options.prior_weight > 0) {
-      if (!header.contains("train_class_counts")) Fail("model file ", model_path.string(), " has no class counts for the prior");
-      std::vector<double> counts = header.at("train_class_counts").get<std::vector<double>>();
-      double total = 0;
-      for (double& c : counts) total += c = std::max(c, 1.0);  // a count never seen still gets a chance
-      std::vector<float> factors;
-      for (double c : counts) factors.push_back(static_cast<float>(std::pow(c / total, options.prior_weight)));
-      impl_->prior = torch::tensor(factors).unsqueeze(0);
-    }
-  } catch (const nlohmann::json::exception&) {
+    members = nn::CounterMembers(header);
+  } catch (const Error&) {
     Fail("model file ", model_path.string(), " has an incomplete counter header");
   }
-  nn::LoadCheckpointWeights(*impl_->net, model_path);
-  impl_->net->eval();
+  if (options.prior_weight > 0) {
+    if (!header.contains("train_class_counts")) Fail("model file ", model_path.string(), " has no class counts for the prior");
+    std::vector<double> counts = header.at("train_class_counts").get<std::vector<double>>();
+    double total = 0;
+    for (double& c : counts) total += c = std::max(c, 1.0);  // a count never seen still gets a chance
+    std::vector<float> factors;
+    for (double c : counts) factors.push_back(static_cast<float>(std::pow(c / total, options.prior_weight)));
+    impl_->prior = torch::tensor(factors).unsqueeze(0);
+  }
+  for (const nn::CounterMember& m : members) impl_->input_sizes.push_back(m.input_size);
+  if (header.contains("members")) {
+    impl_->ensemble = nn::CounterEnsemble(members);
+    nn::LoadCheckpointWeights(*impl_->ensemble, model_path);
+    impl_->ensemble->eval();
+    impl_->nets = impl_->ensemble->nets;
+  } else {
+    impl_->nets.push_back(nn::ResNet(members[0].architecture));
+    nn::LoadCheckpointWeights(*impl_->nets[0], model_path);
+    impl_->nets[0]->eval();
+  }
   at::set_num_threads(threads > 0 ? threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
 }
 
 CnnCounter::~CnnCounter() = default;
 
-int CnnCounter::input_size() const { return impl_->input_size; }
+int CnnCounter::input_size() const { return impl_->input_sizes.front(); }
+
+int CnnCounter::num_networks() const { return static_cast<int>(impl_->nets.size()); }
 
 std::vector<std::vector<float>> CnnCounter::CountProbabilities(const std::vector<cv::Mat>& bgr_patches) {
   std::vector<std::vector<float>> probabilities;
   torch::NoGradGuard no_grad;
   for (size_t begin = 0; begin < bgr_patches.size(); begin += 64) {
     const size_t end = std::min(bgr_patches.size(), begin + 64);
-    std::vector<cv::Mat> inputs;
-    for (size_t i = begin; i < end; ++i) inputs.push_back(nn::LetterboxPatch(bgr_patches[i], impl_->input_size));
-    const torch::Tensor x = nn::ImagesToTensor(inputs);
-    torch::Tensor p = torch::softmax(impl_->net->forward(x), 1);
-    // Mirroring the letterboxed input is what training's flip augmentation does.
-    if (impl_->options.flip_average) p = 0.5 * (p + torch::softmax(impl_->net->forward(torch::flip(x, {3})), 1));
+    torch::Tensor p;
+    for (size_t n = 0; n < impl_->nets.size(); ++n) {
+      std::vector<cv::Mat> inputs;
+      for (size_t i = begin; i < end; ++i) inputs.push_back(nn::LetterboxPatch(bgr_patches[i], impl_->input_sizes[n]));
+      const torch::Tensor x = nn::ImagesToTensor(inputs);
+      torch::Tensor q = torch::softmax(impl_->nets[n]->forward(x), 1);
+      // Mirroring the letterboxed input is what training's flip augmentation does.
+      if (impl_->options.flip_average) q = 0.5 * (q + torch::softmax(impl_->nets[n]->forward(torch::flip(x, {3})), 1));
+      p = n == 0 ? q : p + q;
+    }
+    p = p / static_cast<double>(impl_->nets.size());
     if (impl_->prior.defined()) {
       if (impl_->prior.size(1) != p.size(1)) Fail("class counts of the prior do not match the model's classes");
       p = p * impl_->prior;

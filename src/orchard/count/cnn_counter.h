@@ -30,8 +30,10 @@ struct CnnCounterOptions {
 
 class CnnCounter : public Counter {
  public:
-  // Loads a counter model; throws orchard::Error when the file is missing, is
-  // not a counter model, or does not match its architecture.
+  // Loads a counter model: one network, or an ensemble written by `orchard
+  // train counter-ensemble`, whose networks' probabilities are averaged.
+  // Throws orchard::Error when the file is missing, is not a counter model,
+  // or does not match its architecture.
   explicit CnnCounter(const std::filesystem::path& model_path, int threads = 0, const CnnCounterOptions& options = {});
   ~CnnCounter() override;
 
@@ -44,7 +46,10 @@ class CnnCounter : public Counter {
   // The probabilities of the counts 0..6 per patch (flip-averaged when the options say so).
   std::vector<std::vector<float>> CountProbabilities(const std::vector<cv::Mat>& bgr_patches);
 
+  // Input side of the (first) network.
   int input_size() const;
+  // Networks whose probabilities are averaged (1 unless the file is an ensemble).
+  int num_networks() const;
 
  private:
   struct Impl;

@@ -10,6 +10,7 @@
 #include "orchard/core/error.h"
 #include "orchard/core/file_io.h"
 #include "orchard/nn/checkpoint.h"
+#include "orchard/nn/counter_ensemble.h"
 #include "orchard/nn/counter_training.h"
 #include "orchard/nn/models.h"
 #include "orchard/core/test_util.h"
@@ -129,6 +130,35 @@ TEST(CnnCounter, PriorWeightMultipliesByClassFrequencies) {
   for (int k = 0; k < 7; ++k) sum += expected.emplace_back(plain[k] * std::sqrt(std::max(1, class_counts[k])));
   for (int k = 0; k < 7; ++k) EXPECT_NEAR(weighted[k], expected[k] / sum, 1e-5) << "count " << k;
   EXPECT_THROW(CnnCounter(dir / "counter.pt", 1, CnnCounterOptions{false, 2.0}), Error);
+}
+
+TEST(CnnCounter, EnsembleAveragesItsMembers) {
+  const fs::path dir = TempDir("ensemble");
+  std::vector<fs::path> files;
+  for (int i = 0; i < 2; ++i) {
+    torch::manual_seed(10 + i);
+    nn::ResNet net(nn::ResNetOptions{18, 4, 3, 7});
+    files.push_back(dir / ("m" + std::to_string(i) + ".pt"));
+    nn::SaveCheckpoint(*net,
+                       {{"kind", "counter"}, {"architecture", net->options().ToJson()}, {"input_size", 32 + 16 * i},
+                        {"train_class_counts", std::vector<int>{1, 2, 3, 4, 5, 6, 7}}},
+                       files.back());
+  }
+  nn::WriteCounterEnsemble(files, dir / "ensemble.pt");
+  std::mt19937_64 rng(3);
+  const std::vector<cv::Mat> patches{DiscPatch(1, rng), DiscPatch(2, rng)};
+  CnnCounter ensemble(dir / "ensemble.pt", 1);
+  EXPECT_EQ(ensemble.num_networks(), 2);
+  const auto p = ensemble.CountProbabilities(patches);
+  const auto a = CnnCounter(files[0], 1).CountProbabilities(patches);
+  const auto b = CnnCounter(files[1], 1).CountProbabilities(patches);
+  for (size_t i = 0; i < patches.size(); ++i)
+    for (int k = 0; k < 7; ++k) EXPECT_NEAR(p[i][k], 0.5 * (a[i][k] + b[i][k]), 1e-6);
+  // Class counts add up for the prior; an ensemble is not a member, nor is one file an ensemble.
+  EXPECT_EQ(nn::ReadCheckpointHeader(dir / "ensemble.pt", "counter").at("train_class_counts"),
+            (std::vector<int>{2, 4, 6, 8, 10, 12, 14}));
+  EXPECT_THROW(nn::WriteCounterEnsemble({dir / "ensemble.pt", files[0]}, dir / "twice.pt"), Error);
+  EXPECT_THROW(nn::WriteCounterEnsemble({files[0]}, dir / "one.pt"), Error);
 }
 
 TEST(CnnCounter, RejectsWrongFiles) {

@@ -1,0 +1,66 @@
+#include "orchard/nn/counter_ensemble.h"
+
+#include <string>
+
+#include "orchard/core/error.h"
+#include "orchard/nn/checkpoint.h"
+
+namespace orchard::nn {
+
+std::vector<CounterMember> CounterMembers(const nlohmann::json& header) {
+  std::vector<CounterMember> members;
+  try {
+    if (header.contains("members")) {
+      for (const nlohmann::json& m : header.at("members")) {
+        members.push_back({ResNetOptions::FromJson(m.at("architecture")), m.at("input_size").get<int>()});
+      }
+      if (members.empty()) Fail("counter ensemble without members");
+    } else {
+      members.push_back({ResNetOptions::FromJson(header.at("architecture")), header.at("input_size").get<int>()});
+    }
+  } catch (const nlohmann::json::exception&) {
+    Fail("incomplete counter header");
+  }
+  return members;
+}
+
+CounterEnsembleImpl::CounterEnsembleImpl(const std::vector<CounterMember>& members) {
+  for (size_t i = 0; i < members.size(); ++i) {
+    nets.push_back(register_module("member" + std::to_string(i), ResNet(members[i].architecture)));
+  }
+}
+
+void WriteCounterEnsemble(const std::vector<fs::path>& models, const fs::path& out) {
+  if (models.size() < 2) Fail("an ensemble needs at least two counter models, got ", models.size());
+  std::vector<CounterMember> members;
+  nlohmann::json described = nlohmann::json::array();
+  std::vector<int> class_counts;
+  for (const fs::path& path : models) {
+    const nlohmann::json header = ReadCheckpointHeader(path, "counter");
+    if (header.contains("members")) Fail(path.string(), " is an ensemble already: give single counters");
+    members.push_back(CounterMembers(header).front());
+    nlohmann::json member = {{"source", path.filename().string()},
+                             {"architecture", header.at("architecture")},
+                             {"input_size", header.at("input_size")}};
+    for (const char* key : {"data", "training", "train_class_counts", "copy_paste_probability", "ema_decay"}) {
+      if (header.contains(key)) member[key] = header.at(key);
+    }
+    if (header.contains("train_class_counts")) {
+      const auto counts = header.at("train_class_counts").get<std::vector<int>>();
+      class_counts.resize(std::max(class_counts.size(), counts.size()), 0);
+      for (size_t k = 0; k < counts.size(); ++k) class_counts[k] += counts[k];
+    }
+    described.push_back(member);
+  }
+  CounterEnsemble ensemble(members);
+  for (size_t i = 0; i < models.size(); ++i) LoadCheckpointWeights(*ensemble->nets[i], models[i]);
+  // The first member's architecture and input stand at the top, as in a single counter's header.
+  nlohmann::json header = {{"kind", "counter"},
+                           {"architecture", described[0]["architecture"]},
+                           {"input_size", described[0]["input_size"]},
+                           {"members", described}};
+  if (!class_counts.empty()) header["train_class_counts"] = class_counts;
+  SaveCheckpoint(*ensemble, header, out);
+}
+
+}  // namespace orchard::nn
