@@ -3,6 +3,7 @@
 // on the row's ground and canopy for sides that share few fruit clusters, and
 // the inclusion-exclusion arithmetic of the shared count.
 #include <algorithm>
+#include <cmath>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -214,6 +215,33 @@ TEST(RowRegistrationTest, TakesTheAcrossDistanceFromSharedFruit) {
   EXPECT_NEAR(r.along, 0.25, 0.01);
   EXPECT_NEAR(r.across, 5.1, 0.01);
   EXPECT_LT(r.residual, 0.01);
+}
+
+TEST(RowRegistrationTest, ChecksAnAlignmentAgainstTheCanopy) {
+  RowScene scene;
+  scene.trees = {0, 1.1, 2.5, 3.6};  // uneven, as real trees
+  SideCloud front, back;
+  const Eigen::Isometry3d truth = BackToFrontTransform(0, 0.3, 5.0);
+  RowSides(scene, truth, &front, &back);
+  const RowRegistrationOptions o;
+  EXPECT_GT(CanopyProfileCorrelation(front, back, truth, o), o.min_correlation);
+  EXPECT_LT(CanopyProfileCorrelation(front, back, BackToFrontTransform(0, 1.5, 5.0), o), o.min_correlation);
+  SideCloud bare = back;
+  bare.sparse.clear();
+  EXPECT_TRUE(std::isnan(CanopyProfileCorrelation(front, bare, truth, o)));
+}
+
+TEST(RowRegistrationTest, FailsOnTheSameSideGivenTwice) {
+  SideCloud front, back;
+  RowSides(RowScene(), BackToFrontTransform(0, 0, 5), &front, &back);
+  SideCloud again = front;
+  again.name = "back";
+  try {
+    RegisterSidesOnRow(front, again, RowRegistrationOptions());
+    FAIL() << "registered a side with itself";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("same row"), std::string::npos) << e.what();
+  }
 }
 
 TEST(RowRegistrationTest, FailsWhenTheProfilesDoNotMatch) {

@@ -61,8 +61,10 @@ struct Registration {
   double overlap = 0;      // along-row overlap of the two sides (m)
   double front_length = 0, back_length = 0;  // along-row extents (m)
   std::vector<std::pair<int, int>> pairs;    // matched (front, back) cluster indices
-  // Set by the row registration (row_registration.h) only:
+  // Set by the row registration (row_registration.h), and `correlation` also
+  // when a fruit alignment was checked against the canopy (has_profile):
   bool on_row = false;
+  bool has_profile = false;
   double correlation = 0;         // the canopy profiles' correlation at `along`
   double chance_correlation = 0;  // their best correlation 0.5 m or more away
   bool across_assumed = false;    // across from the centre-plane assumption (no shared fruit)

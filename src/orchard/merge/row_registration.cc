@@ -203,6 +203,22 @@ Levelling LevelOnSparseGround(SideCloud* side, const RowRegistrationOptions& o) 
   return l;
 }
 
+double CanopyProfileCorrelation(const SideCloud& front, const SideCloud& back, const Eigen::Isometry3d& back_to_front,
+                                const RowRegistrationOptions& o) {
+  o.Check();
+  double face_f = 0, face_b = 0;
+  const std::vector<Eigen::Vector3d> canopy_f = Canopy(front, o, &face_f), canopy_b = Canopy(back, o, &face_b);
+  if (static_cast<int>(std::min(canopy_f.size(), canopy_b.size())) < o.min_canopy_points) return std::nan("");
+  const std::vector<double> seen_f = Xs(front.sparse, Eigen::Isometry3d::Identity()),
+                            seen_b = Xs(back.sparse, back_to_front);
+  auto bin = [&](double x) { return static_cast<int>(std::floor(x / o.profile_bin)); };
+  const int f_lo = bin(Quantile(seen_f, 0.01)), f_hi = bin(Quantile(seen_f, 0.99)) + 1;
+  const int b_lo = bin(Quantile(seen_b, 0.01)), b_hi = bin(Quantile(seen_b, 0.99)) + 1;
+  const std::vector<double> pf = Profile(Xs(canopy_f, Eigen::Isometry3d::Identity()), f_lo, f_hi, o),
+                            pb = Profile(Xs(canopy_b, back_to_front), b_lo, b_hi, o);
+  return Correlation(pf, f_lo, pb, b_lo, 0, std::max(f_lo, b_lo), std::min(f_hi, b_hi));
+}
+
 Registration RegisterSidesOnRow(const SideCloud& front, const SideCloud& back, const RowRegistrationOptions& o) {
   o.Check();
   double face_f = 0, face_b = 0;
@@ -311,7 +327,16 @@ Registration RegisterSidesOnRow(const SideCloud& front, const SideCloud& back, c
     assumed = true;
   }
   Registration r = EvaluateAlignment(front, back, BackToFrontTransform(heading_deg, along, across), ro);
-  r.on_row = true, r.correlation = correlation, r.chance_correlation = chance_correlation;
+  // The two sides see opposite faces of the canopy: the back's canopy points
+  // lie beyond the front's. The same video given twice puts them together.
+  std::vector<double> depth_f, depth_b;
+  for (const auto& p : canopy_f) depth_f.push_back(p.y());
+  for (const auto& p : canopy_b) depth_b.push_back((r.back_to_front * p).y());
+  if (Quantile(depth_b, 0.5) <= Quantile(depth_f, 0.5))
+    Fail("the two sides show the same face of the canopy (the back's canopy points lie ",
+         Quantile(depth_f, 0.5) - Quantile(depth_b, 0.5),
+         " m nearer the front camera than the front's): they do not show the same row from both sides");
+  r.on_row = r.has_profile = true, r.correlation = correlation, r.chance_correlation = chance_correlation;
   r.across_assumed = assumed, r.chance_matched = chance;
   // Overlap along the row: of the camera paths, or without them of the
   // canopies.

@@ -93,6 +93,13 @@ struct Levelling {
 // level, the cameras `camera_height` above it. No-op without sparse points.
 Levelling LevelOnSparseGround(SideCloud* side, const RowRegistrationOptions& options);
 
+// The canopy profiles' correlation along the row with the back placed by
+// `back_to_front`: a check on an alignment found from the fruit (few
+// clusters can match by chance). NaN when a side has too few sparse canopy
+// points.
+double CanopyProfileCorrelation(const SideCloud& front, const SideCloud& back, const Eigen::Isometry3d& back_to_front,
+                                const RowRegistrationOptions& options);
+
 // Registers the (levelled) sides on the row. Throws orchard::Error with the
 // reason when a side has too few sparse canopy points, when the canopy
 // profiles do not correlate ("not the same row"), or when the sides cover

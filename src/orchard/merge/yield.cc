@@ -50,8 +50,8 @@ Json AlignmentJson(const Registration& r, const std::string& method) {
           {"overlap_m", r.overlap},
           {"front_length_m", r.front_length},
           {"back_length_m", r.back_length}};
+  if (r.has_profile) j["profile_correlation"] = r.correlation;
   if (r.on_row) {
-    j["profile_correlation"] = r.correlation;
     j["chance_profile_correlation"] = r.chance_correlation;
     j["across_from"] = r.across_assumed ? "assumed: each side sees into the canopy up to its centre plane"
                                         : "fruit clusters seen from both sides";
@@ -137,6 +137,17 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
     try {
       y.registration = RegisterSides(front_cloud, back_cloud, o.registration);
       method = "fruit clusters seen from both sides (Hough vote + closest points)";
+      if (o.row_registration) {
+        // A few clusters can match by chance: the canopies must agree too.
+        const double c = CanopyProfileCorrelation(front_cloud, back_cloud, y.registration.back_to_front, row_options);
+        if (!std::isnan(c)) {
+          y.registration.has_profile = true, y.registration.correlation = c;
+          if (c < row_options.min_correlation)
+            Fail("the fruit clusters' alignment (", y.registration.matched,
+                 " matched) puts the canopies out of line (profile correlation ", c, ", need ",
+                 row_options.min_correlation, ")");
+        }
+      }
     } catch (const Error& fruit_error) {
       if (!o.row_registration || front_cloud.sparse.empty() || back_cloud.sparse.empty()) throw;
       spdlog::info("fruit registration failed ({}); registering on the row", fruit_error.what());
