@@ -48,6 +48,7 @@ void AddCountCommand(CLI::App& app) {
                   "finds the fruit pixels of patches (needed with --in)");
   cmd->add_flag("!--no-flip-average", args->counter.cnn.flip_average,
                "cnn: one pass per patch instead of averaging it with its mirror image");
+  cmd->add_option("--threads", args->counter.threads, "cnn: LibTorch threads (0 = all cores)")->capture_default_str();
   cmd->add_option("--prior-weight", args->counter.cnn.prior_weight,
                   "cnn: weigh the counts by the training frequencies to this power (0 = off, 1 = Bayes' rule)")
       ->capture_default_str();
