@@ -32,11 +32,23 @@ void AddSideOptions(CLI::App* cmd, SideOptions* options) {
   cmd->add_option("--centre-fraction", o.clusters.points.centre_fraction,
                   "Support only near blob centres (fraction of the blob radius, 0 = anywhere on the blob)")
       ->capture_default_str();
+  cmd->add_option("--apple-fraction", o.clusters.points.apple_fraction,
+                  "... but at least this fraction of an apple's radius at the point's depth (0 = no floor)")
+      ->capture_default_str();
+  cmd->add_option("--apple-radius", o.clusters.points.apple_radius, "Smallest apple radius (m) for that floor")
+      ->capture_default_str();
   cmd->add_option("--partner-min", o.clusters.points.min_partner_offset, "Nearest partner frame for a first triangulation")
       ->capture_default_str();
   cmd->add_option("--partner-max", o.clusters.points.max_partner_offset, "Farthest partner frame")
       ->capture_default_str();
   cmd->add_option("--min-cluster-points", o.clusters.min_points, "Fewest fruit points of a cluster")
+      ->capture_default_str();
+  cmd->add_option("--min-cluster-views", o.clusters.min_views, "Fewest frames in which a cluster wins a blob")
+      ->capture_default_str();
+  cmd->add_option("--max-lost-fraction", o.clusters.max_lost_fraction,
+                  "Remove clusters whose points land mostly on blobs other clusters win (1 = keep all)")
+      ->capture_default_str();
+  cmd->add_option("--assign-near", o.clusters.assign_near, "A point off every blob votes for the blob whose centre is near")
       ->capture_default_str();
   cmd->add_option("--fallen-height", o.clusters.fallen_height, "Clusters lower than this (m) are fallen apples")
       ->capture_default_str();

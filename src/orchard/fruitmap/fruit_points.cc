@@ -14,13 +14,61 @@ Eigen::Vector2d Centre(const Blob& b) {
   return {b.centroid.x + 0.5, b.centroid.y + 0.5};
 }
 
+}  // namespace
+
+BlobCentres::BlobCentres(const FruitFrame& frame, int cell_pixels) : frame_(&frame), cell_(cell_pixels) {
+  cols_ = frame.labels.cols / cell_ + 1, rows_ = frame.labels.rows / cell_ + 1;
+  grid_.resize(static_cast<size_t>(cols_) * rows_);
+  for (size_t i = 0; i < frame.blobs.size(); ++i) {
+    const Blob& b = frame.blobs[i];
+    if (b.pixels <= 0) continue;
+    const Eigen::Vector2d c = Centre(b);
+    const int cx = std::clamp(static_cast<int>(c.x()) / cell_, 0, cols_ - 1);
+    const int cy = std::clamp(static_cast<int>(c.y()) / cell_, 0, rows_ - 1);
+    grid_[static_cast<size_t>(cy) * cols_ + cx].push_back(static_cast<int>(i));
+    max_radius_ = std::max(max_radius_, std::sqrt(b.pixels / M_PI));
+  }
+}
+
+int BlobCentres::Near(const CameraView& view, const Eigen::Vector3d& X, const FruitPointOptions& o) const {
+  const double z = view.Depth(X);
+  Eigen::Vector2d p;
+  if (z <= 0 || !view.Project(X, &p)) return 0;
+  // By distance, not by the label under the point: a partly hidden apple's
+  // centre may fall between its visible pieces. Wrong pairings land on fruit
+  // by chance but rarely near the centres of the blobs they land on.
+  const double apple_px = o.apple_fraction * view.fx * o.apple_radius / z;
+  const double reach = std::max({o.centre_fraction * max_radius_, apple_px, 2.0});
+  const int x0 = std::max(0, static_cast<int>((p.x() - reach) / cell_)), x1 = std::min(cols_ - 1, static_cast<int>((p.x() + reach) / cell_));
+  const int y0 = std::max(0, static_cast<int>((p.y() - reach) / cell_)), y1 = std::min(rows_ - 1, static_cast<int>((p.y() + reach) / cell_));
+  double nearest = 1e300;
+  int id = 0;
+  for (int y = y0; y <= y1; ++y)
+    for (int x = x0; x <= x1; ++x)
+      for (int i : grid_[static_cast<size_t>(y) * cols_ + x]) {
+        const Blob& b = frame_->blobs[i];
+        const double tol = std::max({o.centre_fraction * std::sqrt(b.pixels / M_PI), apple_px, 2.0});
+        const double d = (p - Centre(b)).norm();
+        if (d <= tol && d < nearest) nearest = d, id = b.id;
+      }
+  return id;
+}
+
+int BlobNearPoint(const CameraView& view, const FruitFrame& frame, const Eigen::Vector3d& X,
+                  const FruitPointOptions& o) {
+  return BlobCentres(frame).Near(view, X, o);
+}
+
+namespace {
+
 struct Support {
   int in_image = 0, hits = 0;
   std::vector<std::pair<int, int>> blobs;  // (frame, blob id) hit
 };
 
 Support CheckSupport(const std::vector<CameraView>& views, const std::vector<FruitFrame>& frames,
-                     const Eigen::Vector3d& X, int centre, const FruitPointOptions& o) {
+                     const std::vector<BlobCentres>& centres, const Eigen::Vector3d& X, int centre,
+                     const FruitPointOptions& o) {
   Support s;
   const int n = static_cast<int>(frames.size());
   for (int f = std::max(0, centre - o.support_window); f <= std::min(n - 1, centre + o.support_window); ++f) {
@@ -29,21 +77,8 @@ Support CheckSupport(const std::vector<CameraView>& views, const std::vector<Fru
     Eigen::Vector2d p;
     if (!views[f].Project(X, &p)) continue;
     ++s.in_image;
-    int id = 0;
-    if (o.centre_fraction > 0) {
-      // Near a blob's centre: a wrong pairing lands on fruit by chance, but
-      // rarely near the centres of the blobs it lands on. By distance, not by
-      // the label under the point: a partly hidden apple's centre may fall
-      // between its visible pieces.
-      double nearest = 1e300;
-      for (const Blob& b : frames[f].blobs) {
-        if (p.x() < b.box.x1 - 2 || p.x() > b.box.x2 + 2 || p.y() < b.box.y1 - 2 || p.y() > b.box.y2 + 2) continue;
-        const double d = (p - Centre(b)).norm();
-        if (d <= std::max(o.centre_fraction * std::sqrt(b.pixels / M_PI), 2.0) && d < nearest) nearest = d, id = b.id;
-      }
-    } else {
-      id = frames[f].labels(static_cast<int>(p.y()), static_cast<int>(p.x()));
-    }
+    const int id = o.centre_fraction > 0 ? centres[f].Near(views[f], X, o)
+                                         : frames[f].labels(static_cast<int>(p.y()), static_cast<int>(p.x()));
     if (id <= 0) continue;
     ++s.hits, s.blobs.emplace_back(f, id);
   }
@@ -79,6 +114,8 @@ void FruitPointOptions::Check() const {
   ORCHARD_CHECK_OPTION(min_support_ratio > 0 && min_support_ratio <= 1, "min support ratio must be in (0, 1], got ",
                        min_support_ratio);
   ORCHARD_CHECK_OPTION(centre_fraction >= 0, "centre fraction must be >= 0, got ", centre_fraction);
+  ORCHARD_CHECK_OPTION(apple_fraction >= 0 && apple_radius > 0, "apple fraction must be >= 0 and apple radius > 0, got ",
+                       apple_fraction, ", ", apple_radius);
   ORCHARD_CHECK_OPTION(min_depth > 0 && max_depth > min_depth, "depth range must satisfy 0 < min < max, got ",
                        min_depth, "..", max_depth);
 }
@@ -89,6 +126,8 @@ std::vector<FruitPoint> TriangulateFruitPoints(const std::vector<CameraView>& vi
   if (views.size() != frames.size()) Fail("fruit points: ", views.size(), " views but ", frames.size(), " frames");
   std::vector<FruitPoint> points;
   const int n = static_cast<int>(frames.size());
+  std::vector<BlobCentres> centres;
+  for (const auto& f : frames) centres.emplace_back(f);
   for (int i = 0; i < n; ++i) {
     const double tol = o.max_error_fraction * views[i].width;
     for (const Blob& blob : frames[i].blobs) {
@@ -109,7 +148,7 @@ std::vector<FruitPoint> TriangulateFruitPoints(const std::vector<CameraView>& vi
           if (!TriangulatePoint({&views[i], &views[j]}, {pi, pj}, &X)) continue;
           if (views[i].Depth(X) < o.min_depth || views[i].Depth(X) > o.max_depth) continue;
           if (views[j].Depth(X) < o.min_depth) continue;
-          Support s = CheckSupport(views, frames, X, i, o);
+          Support s = CheckSupport(views, frames, centres, X, i, o);
           if (!Accept(s, o)) continue;
           // Refine on the centres of all blobs the point lands on; drop the
           // centres that disagree (a different apple's blob) and re-check.
@@ -125,7 +164,7 @@ std::vector<FruitPoint> TriangulateFruitPoints(const std::vector<CameraView>& vi
             if (vs.size() < 2 || !TriangulatePoint(vs, ps, &Y)) break;
             X = Y;
           }
-          s = CheckSupport(views, frames, X, i, o);
+          s = CheckSupport(views, frames, centres, X, i, o);
           // The blob itself must still be hit.
           if (!Accept(s, o) ||
               std::find(s.blobs.begin(), s.blobs.end(), std::make_pair(i, blob.id)) == s.blobs.end())

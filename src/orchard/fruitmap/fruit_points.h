@@ -37,14 +37,23 @@ struct FruitPointOptions {
   // as a fraction of the image width (1% = ~10 px at 960 px).
   double max_error_fraction = 0.01;
   // A point is kept when it lands on fruit in at least this many frames and
-  // in at least this fraction of the frames whose image it falls into.
-  int min_support = 3;
-  double min_support_ratio = 0.6;
+  // in at least this fraction of the frames whose image it falls into. A
+  // partly hidden apple shows through gaps in the leaves in a third to a half
+  // of the frames; the clusters' own checks (min_views, max_lost_fraction in
+  // side.h) catch most chance pairings this lets through.
+  int min_support = 4;
+  double min_support_ratio = 0.3;
   // A frame supports a point only when the point projects within this
   // fraction of the blob's equivalent radius (sqrt(pixels / pi)) of the
   // blob's centre (0 = anywhere on the blob): wrong pairings land on fruit by
   // chance but rarely near blob centres.
   double centre_fraction = 0.7;
+  // ... but never less than this fraction of an apple of `apple_radius`
+  // (scene units) seen at the point's depth: a partly hidden apple's visible
+  // piece is small, yet its centre lies up to an apple radius from the point
+  // (0 = no floor).
+  double apple_fraction = 0.7;
+  double apple_radius = 0.03;
   // Depth range in front of the cameras (scene units: metres once scaled).
   double min_depth = 0.3;
   double max_depth = 15;
@@ -57,6 +66,26 @@ struct FruitPoint {
   int blob_id = 0;
   int support = 0;  // frames where it lands on fruit
 };
+
+// A frame's blob centres bucketed in a grid, for finding the blob near a
+// projected point without scanning every blob (a frame holds hundreds).
+class BlobCentres {
+ public:
+  explicit BlobCentres(const FruitFrame& frame, int cell_pixels = 16);
+  // The blob whose centre is nearest to X's projection within the tolerance
+  // of `centre_fraction` / `apple_fraction`; 0 when none is near enough.
+  int Near(const CameraView& view, const Eigen::Vector3d& X, const FruitPointOptions& options) const;
+
+ private:
+  const FruitFrame* frame_;
+  int cell_, cols_ = 0, rows_ = 0;
+  double max_radius_ = 0;               // largest equivalent radius of a blob
+  std::vector<std::vector<int>> grid_;  // blob indices per cell
+};
+
+// BlobCentres(frame).Near(view, X, options), for a single lookup.
+int BlobNearPoint(const CameraView& view, const FruitFrame& frame, const Eigen::Vector3d& X,
+                  const FruitPointOptions& options);
 
 // `views[i]` and `frames[i]` are the same frame; frames are in sequence order.
 std::vector<FruitPoint> TriangulateFruitPoints(const std::vector<CameraView>& views,

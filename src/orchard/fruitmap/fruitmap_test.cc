@@ -149,6 +149,90 @@ TEST(CountFruitClusters, CountsEachBallOnceAndRemovesFallenAndNextRow) {
   EXPECT_GT(r.single_frame_sum, 3 * r.count);
 }
 
+TEST(BlobNearPoint, ASmallPieceOfAHiddenAppleSupportsItsCentre) {
+  const CameraView v = ViewAt(0);
+  const Eigen::Vector3d X(0.1, 0, 1.5);  // 2.5 m away: a 3 cm apple is 6 px, 70% of it 4.2 px
+  Eigen::Vector2d p;
+  ASSERT_TRUE(v.Project(X, &p));
+  FruitFrame frame;
+  frame.labels = cv::Mat1i::zeros(v.height, v.width);
+  Blob piece;  // 20 pixels (equivalent radius 2.5 px) showing 4 px right of the apple's centre
+  piece.id = 1, piece.pixels = 20;
+  piece.centroid = {p.x() - 0.5 + 4, p.y() - 0.5};
+  piece.box = Box{piece.centroid.x - 2, piece.centroid.y - 2, piece.centroid.x + 3, piece.centroid.y + 3};
+  Blob other = piece;  // another apple's piece 15 px away
+  other.id = 2, other.centroid.x += 11, other.box.x1 += 11, other.box.x2 += 11;
+  frame.blobs = {piece, other};
+  FruitPointOptions o;
+  EXPECT_EQ(BlobNearPoint(v, frame, X, o), 1);
+  o.apple_fraction = 0;  // only the piece's own size: its centre is too far
+  EXPECT_EQ(BlobNearPoint(v, frame, X, o), 0);
+  o.apple_fraction = 0.7;
+  EXPECT_EQ(BlobNearPoint(v, frame, X + Eigen::Vector3d(0.07, 0, 0), o), 2);  // 14 px right: the other piece
+  EXPECT_EQ(BlobNearPoint(v, frame, X + Eigen::Vector3d(0, 0, 0.05), o), 0);  // 10 px up: neither
+  o.apple_radius = 0;
+  EXPECT_THROW(o.Check(), Error);
+}
+
+TEST(CountFruitClusters, FindsAnAppleSeenOnlyThroughGapsInTheLeaves) {
+  std::vector<CameraView> views;
+  for (int i = 0; i < 24; ++i) views.push_back(ViewAt(-1.2 + 0.1 * i));
+  const std::vector<Eigen::Vector3d> balls = {{-0.2, 0, 1.2}, {0.3, -0.1, 1.6}};
+  std::vector<FruitFrame> frames = RenderBalls(views, balls, 0.04);
+  // The second apple shows in one frame of three, and then only its left
+  // half (leaves cover the rest): its piece's centre is off the apple's.
+  for (size_t f = 0; f < frames.size(); ++f) {
+    FruitFrame& fr = frames[f];
+    for (size_t b = 1; b < fr.blobs.size(); ++b) {
+      Blob& blob = fr.blobs[b];
+      if (f % 3 != 0) {
+        fr.labels.setTo(0, fr.labels == blob.id);
+        blob.pixels = 0, blob.box = Box{-100, -100, -99, -99}, blob.centroid = {-100, -100};
+        continue;
+      }
+      const int cx = static_cast<int>(blob.centroid.x);
+      cv::Mat1i right = fr.labels(cv::Rect(cx, 0, fr.labels.cols - cx, fr.labels.rows));
+      right.setTo(0, right == blob.id);
+      const cv::Mat1b piece = fr.labels == blob.id;
+      const cv::Moments m = cv::moments(piece, true);
+      blob.pixels = cv::countNonZero(piece);
+      blob.centroid = {m.m10 / m.m00, m.m01 / m.m00};
+      blob.box.x2 = cx;
+    }
+  }
+  Plane ground;  // z = 0
+  ClusterOptions o;
+  ClusterResult r = CountFruitClusters(views, frames, ground, o);
+  EXPECT_EQ(r.count, 2);
+  // The support ratio of earlier versions (60% of the frames around) loses it.
+  o.points.min_support_ratio = 0.6;
+  r = CountFruitClusters(views, frames, ground, o);
+  EXPECT_EQ(r.count, 1);
+}
+
+TEST(EvidenceStatus, FewViewsAndGhostsAreRemoved) {
+  ClusterOptions o;
+  FruitCluster c;
+  c.points = std::vector<int>(8, 0);
+  c.count = 1;
+  c.views = std::vector<ClusterView>(5, ClusterView{0, 100, 1});
+  c.votes_won = 30, c.votes_lost = 20;
+  EXPECT_EQ(EvidenceStatus(c, o), "kept");
+  c.views.resize(2);  // wins a blob in two frames only: a chance pairing
+  EXPECT_EQ(EvidenceStatus(c, o), "few_views");
+  c.views.resize(5);
+  o.max_lost_fraction = 0.6;  // `orchard yield`'s setting
+  EXPECT_EQ(EvidenceStatus(c, o), "kept");
+  c.votes_lost = 50;  // its points land mostly on blobs other clusters win
+  EXPECT_EQ(EvidenceStatus(c, o), "ghost");
+  o.min_points = 9;
+  EXPECT_EQ(EvidenceStatus(c, o), "too_few_points");
+  o.min_points = 1, c.count = 0;
+  EXPECT_EQ(EvidenceStatus(c, o), "no_views");
+  o.max_lost_fraction = 0;
+  EXPECT_THROW(o.Check(), Error);
+}
+
 TEST(ParseGroundPlane, NumbersAndErrors) {
   const Plane p = ParseGroundPlane("0,0,2,-1");
   EXPECT_NEAR(p.normal.z(), 1, 1e-12);

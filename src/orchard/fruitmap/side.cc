@@ -68,10 +68,21 @@ void ClusterOptions::Check() const {
   points.Check();
   ORCHARD_CHECK_OPTION(link_distance > 0, "link distance must be positive, got ", link_distance);
   ORCHARD_CHECK_OPTION(min_points >= 1, "min cluster points must be at least 1, got ", min_points);
+  ORCHARD_CHECK_OPTION(min_views >= 1, "min cluster views must be at least 1, got ", min_views);
+  ORCHARD_CHECK_OPTION(max_lost_fraction > 0 && max_lost_fraction <= 1, "max lost fraction must be in (0, 1], got ",
+                       max_lost_fraction);
   ORCHARD_CHECK_OPTION(best_views >= 1, "best views must be at least 1, got ", best_views);
   ORCHARD_CHECK_OPTION(row_distance >= 0, "row distance must be >= 0, got ", row_distance);
   ORCHARD_CHECK_OPTION(next_row_margin > 0, "next-row margin must be positive, got ", next_row_margin);
   ORCHARD_CHECK_OPTION(near_margin > 0, "near margin must be positive, got ", near_margin);
+}
+
+std::string EvidenceStatus(const FruitCluster& c, const ClusterOptions& o) {
+  if (static_cast<int>(c.points.size()) < o.min_points) return "too_few_points";
+  if (c.count == 0) return "no_views";
+  if (static_cast<int>(c.views.size()) < o.min_views) return "few_views";
+  if (c.votes_lost > o.max_lost_fraction * (c.votes_won + c.votes_lost)) return "ghost";
+  return "kept";
 }
 
 ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std::vector<FruitFrame>& frames,
@@ -101,18 +112,24 @@ ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std
   // Each blob of each frame goes to the cluster with most points landing on it.
   const int n = static_cast<int>(frames.size());
   for (int f = 0; f < n; ++f) {
+    const BlobCentres centres(frames[f]);
     std::map<int, std::map<int, int>> votes;  // blob -> cluster -> points
     for (size_t i = 0; i < xyz.size(); ++i) {
       if (static_cast<int>(r.clusters[r.point_cluster[i]].points.size()) < o.min_points) continue;
       Eigen::Vector2d p;
       if (views[f].Depth(xyz[i]) < o.points.min_depth || !views[f].Project(xyz[i], &p)) continue;
-      const int id = frames[f].labels(static_cast<int>(p.y()), static_cast<int>(p.x()));
+      // The blob under the point, else a blob whose centre is near it: a
+      // partly hidden apple's visible piece is small and off its centre.
+      int id = frames[f].labels(static_cast<int>(p.y()), static_cast<int>(p.x()));
+      if (id <= 0 && o.assign_near) id = centres.Near(views[f], xyz[i], o.points);
       if (id > 0) ++votes[id][r.point_cluster[i]];
     }
     std::map<int, size_t> view_of;  // cluster -> index in its views
     for (const auto& [blob, by_cluster] : votes) {
       const auto best = std::max_element(by_cluster.begin(), by_cluster.end(),
                                          [](const auto& a, const auto& b) { return a.second < b.second; });
+      for (const auto& [cluster, points] : by_cluster)
+        (cluster == best->first ? r.clusters[cluster].votes_won : r.clusters[cluster].votes_lost) += points;
       FruitCluster& c = r.clusters[best->first];
       if (!view_of.count(best->first)) {
         view_of[best->first] = c.views.size();
@@ -139,13 +156,9 @@ ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std
     c.count = MedianOfBestViews(c.views, o.best_views, &c.count_frames);
     c.height = ground.SignedDistance(c.centre);
     c.distance = across.dot(c.centre - mean);
-    if (static_cast<int>(c.points.size()) < o.min_points)
-      c.status = "too_few_points";
-    else if (c.count == 0)
-      c.status = "no_views";
-    else if (c.height < o.fallen_height)
-      c.status = "fallen";
-    else
+    c.status = EvidenceStatus(c, o);
+    if (c.status == "kept" && c.height < o.fallen_height) c.status = "fallen";
+    if (c.status == "kept")
       tree_distances.emplace_back(
           c.distance, std::max_element(c.views.begin(), c.views.end(), [](const auto& a, const auto& b) {
                         return a.pixels < b.pixels;
@@ -304,7 +317,7 @@ cv::Scalar ClusterColour(int id) {
 void WriteOutputs(const fs::path& out, const std::vector<fs::path>& image_paths, const std::vector<FruitFrame>& frames,
                   const ClusterResult& r, const SideOptions& o) {
   std::ostringstream csv;
-  csv << "id,x,y,z,extent_x,extent_y,extent_z,points,count,status,height,distance,frames\n";
+  csv << "id,x,y,z,extent_x,extent_y,extent_z,points,count,status,height,distance,frames,views,votes_won,votes_lost\n";
   csv.precision(4);
   csv << std::fixed;
   for (const auto& c : r.clusters) {
@@ -314,7 +327,7 @@ void WriteOutputs(const fs::path& out, const std::vector<fs::path>& image_paths,
         << c.distance << ',';
     for (size_t i = 0; i < c.count_frames.size(); ++i)
       csv << (i ? ";" : "") << image_paths[c.count_frames[i]].filename().string();
-    csv << '\n';
+    csv << ',' << c.views.size() << ',' << c.votes_won << ',' << c.votes_lost << '\n';
   }
   WriteTextFileAtomic(out / "clusters.csv", csv.str());
   std::ostringstream ply;
@@ -343,7 +356,9 @@ void WriteOutputs(const fs::path& out, const std::vector<fs::path>& image_paths,
         cv::findContours(region, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_SIMPLE);
         cv::drawContours(image, contours, -1, col, 2);
         const cv::Rect box = cv::boundingRect(region);
-        const std::string label = kept ? std::to_string(c.count) : c.status.substr(0, 1);
+        // One letter per reason (few_views would clash with fallen).
+        const std::string label =
+            kept ? std::to_string(c.count) : c.status == "few_views" ? "v" : c.status.substr(0, 1);
         cv::putText(image, label, {box.x, std::max(12, box.y - 3)}, cv::FONT_HERSHEY_SIMPLEX, 0.5, col, 2);
       }
     }

@@ -35,6 +35,17 @@ struct ClusterOptions {
   // check already; 2 drops chance pairings but also heavily occluded apples
   // (on the development row 1 gave the count closest to the truth).
   int min_points = 1;
+  // Fewest frames in which a cluster wins a blob (is the cluster with most
+  // points on it): a real apple is seen in many frames, a chance pairing of
+  // different apples' blobs wins one or two.
+  int min_views = 3;
+  // Clusters whose points land mostly (more than this fraction of their
+  // point-on-blob votes) on blobs that other clusters win are ghosts of
+  // those clusters' apples: wrong pairings offset in depth (1 = keep all).
+  double max_lost_fraction = 1.0;
+  // A point votes for the blob under it, or else (when true) for the blob
+  // whose centre it is near, as in the support check.
+  bool assign_near = true;
   // The cluster count is the median over this many best views.
   int best_views = 3;
   // Clusters whose centre is less than this (m) above the ground are fallen apples.
@@ -60,10 +71,14 @@ struct FruitCluster {
   std::vector<ClusterView> views;  // frames where it is assigned blobs
   std::vector<std::vector<int>> view_blobs;  // blob ids per view (same order as views)
   std::vector<int> count_frames;  // the best views the count came from
+  // Point-on-blob votes for blobs this cluster won, and for blobs another
+  // cluster won.
+  int votes_won = 0, votes_lost = 0;
   int count = 0;
   double height = 0;    // centre above the ground (m)
   double distance = 0;  // centre from the camera path, across the row (m)
-  std::string status = "kept";  // kept, too_few_points, no_views, fallen, next_row, too_near
+  // kept, too_few_points, no_views, few_views, ghost, fallen, next_row, too_near
+  std::string status = "kept";
 };
 
 struct ClusterResult {
@@ -81,6 +96,10 @@ struct ClusterResult {
   int count = 0;            // sum over kept clusters
   int single_frame_sum = 0; // sum of all blob counts over all frames
 };
+
+// "kept", or why the cluster's own evidence (points, views, votes; not its
+// place in the row) is too weak: too_few_points, no_views, few_views, ghost.
+std::string EvidenceStatus(const FruitCluster& cluster, const ClusterOptions& options);
 
 // The 3D stage on frames with known (metric) poses and a ground plane.
 ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std::vector<FruitFrame>& frames,

@@ -17,12 +17,15 @@ namespace orchard {
 namespace fs = std::filesystem;
 
 struct YieldOptions {
-  // Each side's clusters need 5 fruit points here (1 for `orchard side`):
-  // a one-side count profits from chance clusters that make up for missed
-  // apples, but in the union of two sides both sides' chance clusters add up
-  // (seed 1: 63 clusters with no apple, 1-3 points each, against a median of
-  // 20 points for real ones).
-  YieldOptions() { side.clusters.min_points = 5; }
+  // Each side's clusters need 5 fruit points here (1 for `orchard side`) and
+  // ghosts (clusters whose points land mostly on other clusters' blobs) are
+  // dropped: a one-side count profits from chance clusters that make up for
+  // missed apples, but in the union of two sides both sides' chance clusters
+  // add up (docs/yield.md).
+  YieldOptions() {
+    side.clusters.min_points = 5;
+    side.clusters.max_lost_fraction = 0.6;
+  }
   SideOptions side;
   RegistrationOptions registration;
   // When the fruit clusters do not register the sides and both have COLMAP's
