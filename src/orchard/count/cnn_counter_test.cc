@@ -13,6 +13,7 @@
 #include "orchard/nn/counter_ensemble.h"
 #include "orchard/nn/counter_training.h"
 #include "orchard/nn/models.h"
+#include "orchard/nn/patch_input.h"
 #include "orchard/core/test_util.h"
 
 namespace orchard {
@@ -154,6 +155,15 @@ TEST(CnnCounter, EnsembleAveragesItsMembers) {
   const auto b = CnnCounter(files[1], 1).CountProbabilities(patches);
   for (size_t i = 0; i < patches.size(); ++i)
     for (int k = 0; k < 7; ++k) EXPECT_NEAR(p[i][k], 0.5 * (a[i][k] + b[i][k]), 1e-6);
+  // A reader of single counters loads the ensemble file as its first network.
+  nn::ResNet first(nn::ResNetOptions{18, 4, 3, 7});
+  nn::LoadCheckpointWeights(*first, dir / "ensemble.pt");
+  first->eval();
+  const auto as_single = CnnCounter(files[0], 1, CnnCounterOptions{false}).CountProbabilities({patches[0]})[0];
+  torch::NoGradGuard no_grad;
+  const torch::Tensor direct =
+      torch::softmax(first->forward(nn::ImagesToTensor({nn::LetterboxPatch(patches[0], 32)})), 1);
+  for (int k = 0; k < 7; ++k) EXPECT_NEAR(direct[0][k].item<float>(), as_single[k], 1e-6);
   // Class counts add up for the prior; an ensemble is not a member, nor is one file an ensemble.
   EXPECT_EQ(nn::ReadCheckpointHeader(dir / "ensemble.pt", "counter").at("train_class_counts"),
             (std::vector<int>{2, 4, 6, 8, 10, 12, 14}));

@@ -26,7 +26,13 @@ std::vector<CounterMember> CounterMembers(const nlohmann::json& header) {
 
 CounterEnsembleImpl::CounterEnsembleImpl(const std::vector<CounterMember>& members) {
   for (size_t i = 0; i < members.size(); ++i) {
-    nets.push_back(register_module("member" + std::to_string(i), ResNet(members[i].architecture)));
+    ResNet net(members[i].architecture);
+    if (i == 0) {
+      for (const auto& child : net->named_children()) register_module(child.key(), child.value());
+    } else {
+      register_module("member" + std::to_string(i), net);
+    }
+    nets.push_back(net);
   }
 }
 

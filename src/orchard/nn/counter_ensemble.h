@@ -24,7 +24,10 @@ struct CounterMember {
 // of a file written by `orchard train counter`.
 std::vector<CounterMember> CounterMembers(const nlohmann::json& header);
 
-// The networks of an ensemble file, registered as member0, member1, ...
+// The networks of an ensemble file. The first one's modules sit at the top,
+// named as in a single counter file, so a program that reads single counters
+// only still loads the file (as its first network); the others are member1,
+// member2, ...
 class CounterEnsembleImpl : public torch::nn::Module {
  public:
   explicit CounterEnsembleImpl(const std::vector<CounterMember>& members);
