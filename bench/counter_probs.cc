@@ -5,6 +5,7 @@
 //   counter_probs COUNTER.pt OUT.csv PATCH_DIR...
 #include <cstdio>
 #include <fstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,8 @@ int main(int argc, char** argv) {
     }
     at::set_num_threads(1);
     const nlohmann::json header = orchard::nn::ReadCheckpointHeader(argv[1], "counter");
+    // An ensemble file would load as its first network only.
+    if (header.contains("members")) throw std::runtime_error("give a single counter, not an ensemble");
     const int input_size = header.at("input_size").get<int>();
     orchard::nn::ResNet net(orchard::nn::ResNetOptions::FromJson(header.at("architecture")));
     orchard::nn::LoadCheckpointWeights(*net, argv[1]);
