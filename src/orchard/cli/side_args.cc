@@ -3,10 +3,13 @@
 #include <CLI/CLI.hpp>
 
 #include "orchard/core/error.h"
+#include "orchard/core/file_io.h"
 #include "orchard/count/counter_factory.h"
 #include "orchard/detect/detector_factory.h"
 
 namespace orchard {
+
+namespace fs = std::filesystem;
 
 void AddSideOptions(CLI::App* cmd, SideOptions* options) {
   SideOptions& o = *options;
@@ -84,7 +87,9 @@ void SetUpFruit(const FruitArgs& a, const std::string& masks, FruitTools* tools,
       tools->detector = MakeDetector(choice);
     }
     in->detector = tools->detector.get();
-    in->detector_name = a.detector + ":" + (a.model.empty() ? DefaultDetectorModel(a.detector).string() : a.model);
+    const fs::path model = a.model.empty() ? DefaultDetectorModel(a.detector) : fs::path(a.model);
+    // The fingerprint redoes the per-frame cache when a model is retrained in place.
+    in->detector_name = a.detector + ":" + model.string() + "@" + FileFingerprint(model);
   }
   if (a.counter != "blob" && !tools->counter) {
     CounterChoice choice;
@@ -94,7 +99,11 @@ void SetUpFruit(const FruitArgs& a, const std::string& masks, FruitTools* tools,
     tools->counter = MakeCounter(choice);
   }
   in->counter = tools->counter.get();
-  in->counter_name = a.counter + (a.counter_model.empty() ? "" : ":" + a.counter_model);
+  in->counter_name = a.counter;
+  if (a.counter == "cnn" || !a.counter_model.empty()) {
+    const fs::path model = a.counter_model.empty() ? DefaultCounterModel() : fs::path(a.counter_model);
+    in->counter_name += ":" + model.string() + "@" + FileFingerprint(model);
+  }
 }
 
 }  // namespace orchard

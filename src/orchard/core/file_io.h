@@ -17,6 +17,11 @@ namespace fs = std::filesystem;
 // Reads a whole text file; throws orchard::Error naming the path if it cannot.
 std::string ReadTextFile(const fs::path& path);
 
+// A short fingerprint of a file's bytes (64-bit FNV-1a, hex), "" when it
+// cannot be read: caches keyed on a model's path also change when the model
+// is retrained in place.
+std::string FileFingerprint(const fs::path& path);
+
 // Writes `content` to `path` atomically (temporary file in the same folder,
 // then rename). Creates missing parent folders.
 void WriteTextFileAtomic(const fs::path& path, const std::string& content);

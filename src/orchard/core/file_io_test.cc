@@ -30,6 +30,20 @@ TEST(FileIo, FailedWriteKeepsEarlierResult) {
   EXPECT_EQ(ReadTextFile(dir / "r.txt"), "earlier");
 }
 
+TEST(FileIo, FingerprintFollowsTheBytes) {
+  const fs::path dir = TempDir("fingerprint");
+  WriteTextFileAtomic(dir / "m", "");
+  EXPECT_EQ(FileFingerprint(dir / "m"), "cbf29ce484222325");  // FNV-1a offset basis: no bytes
+  WriteTextFileAtomic(dir / "m", "a");
+  EXPECT_EQ(FileFingerprint(dir / "m"), "af63dc4c8601ec8c");  // published FNV-1a 64 of "a"
+  const std::string big(200000, 'x');  // more than one read buffer
+  WriteTextFileAtomic(dir / "m", big);
+  const std::string f = FileFingerprint(dir / "m");
+  WriteTextFileAtomic(dir / "m", big.substr(1) + "y");
+  EXPECT_NE(FileFingerprint(dir / "m"), f);
+  EXPECT_EQ(FileFingerprint(dir / "missing"), "");
+}
+
 TEST(FileIo, ReadImageErrors) {
   const fs::path dir = TempDir("img");
   EXPECT_THROW(ReadImage(dir / "missing.png"), Error);
