@@ -57,14 +57,16 @@ struct RowRegistrationOptions {
   // distance across from the two canopy faces' sum to `max_thickness` (m)
   // beyond it, in `grid_step` (m). It takes the fruit's answer when it
   // matches at least `min_matched` clusters and `min_distinctness` times as
-  // many as any alignment farther than 0.25 m across (seed 11 with the U-Net:
-  // 5 against 4 by chance, so not taken).
+  // many as any alignment farther than 0.25 m across. Seed 11 (COLMAP, commit
+  // 17a4ff3's sides): 7, 10 and 4 matched against 3, 4 and 2 elsewhere put the
+  // sides 7, 7 and 15 cm too close (chance matches, and each side's fruit
+  // points lie towards its own camera), hence 3x.
   double match_distance = 0.08;
   double along_window = 0.15;
   double max_thickness = 3.0;
   double grid_step = 0.01;
   int min_matched = 3;
-  double min_distinctness = 2;
+  double min_distinctness = 3;
   // Otherwise each side is assumed to see into the canopy up to the row's
   // centre plane: the centre lies at this quantile of the side's canopy
   // points' distances (chosen on seed 11, the one row with COLMAP runs:
