@@ -22,6 +22,9 @@ void AddSideOptions(CLI::App* cmd, SideOptions* options) {
   cmd->add_option("--colmap", o.colmap.colmap, "COLMAP executable")->capture_default_str();
   cmd->add_option("--camera-height", o.camera_height, "Camera height above the ground (m): the scale")
       ->capture_default_str();
+  cmd->add_option("--ground-below-penalty", o.ground.below_penalty,
+                  "Ground fit: each sparse point well below a candidate plane costs this many inliers")
+      ->capture_default_str();
   cmd->add_flag("--rescale-poses", o.rescale_given_poses, "Scale given poses by the camera height too");
   cmd->add_option("--link-distance", o.clusters.link_distance, "Fruit points closer than this (m) form a cluster")
       ->capture_default_str();

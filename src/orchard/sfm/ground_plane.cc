@@ -40,6 +40,7 @@ void GroundPlaneOptions::Check() const {
                        inlier_fraction);
   ORCHARD_CHECK_OPTION(max_tilt_deg > 0 && max_tilt_deg < 90, "ground max tilt must be in (0, 90) degrees, got ",
                        max_tilt_deg);
+  ORCHARD_CHECK_OPTION(below_penalty >= 0, "ground below penalty must be >= 0, got ", below_penalty);
   ORCHARD_CHECK_OPTION(min_inliers >= 3, "ground min inliers must be at least 3, got ", min_inliers);
 }
 
@@ -69,8 +70,17 @@ Plane FitGroundPlane(const std::vector<Eigen::Vector3d>& points, const std::vect
     for (const auto& x : points) n += std::abs(p.SignedDistance(x)) < tol;
     return n;
   };
+  auto score = [&](const Plane& p) {
+    int inliers = 0, below = 0;
+    for (const auto& x : points) {
+      const double d = p.SignedDistance(x);
+      inliers += std::abs(d) < tol, below += d <= -tol;
+    }
+    return inliers - options.below_penalty * below;
+  };
   Plane best;
   int best_count = -1;
+  double best_score = -1e300;
   for (int it = 0; it < options.iterations; ++it) {
     const Eigen::Vector3d& a = points[pick(rng)];
     const Eigen::Vector3d& b = points[pick(rng)];
@@ -82,8 +92,8 @@ Plane FitGroundPlane(const std::vector<Eigen::Vector3d>& points, const std::vect
     if (p.normal.dot(up) < 0) p.normal = -p.normal;
     p.d = -p.normal.dot(a);
     if (!admissible(p)) continue;
-    const int count = count_inliers(p);
-    if (count > best_count) best_count = count, best = p;
+    const double sc = score(p);
+    if (sc > best_score) best_score = sc, best = p, best_count = count_inliers(p);
   }
   if (best_count < options.min_inliers)
     Fail("ground plane: no roughly horizontal plane below the cameras has ", options.min_inliers,

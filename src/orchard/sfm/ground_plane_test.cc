@@ -56,6 +56,26 @@ TEST(GroundPlane, RobustToFruitWallAndOutliers) {
   EXPECT_NEAR(g.SignedDistance(views[2].Center()), 1.5 + 0.0 * s, 0.15);
 }
 
+TEST(GroundPlane, PrefersTheLowestSurfaceToADenserLayerAboveIt) {
+  // 100 ground points and a horizontal layer of 120 (the canopy's lower edge,
+  // seen densely) 0.75 m up, both below the cameras: the layer has more
+  // inliers, but the whole ground lies below it.
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<Eigen::Vector3d> pts;
+  for (int i = 0; i < 100; ++i) pts.push_back({4 * u(rng), 1 + 2 * u(rng), 0.01 * u(rng)});
+  for (int i = 0; i < 120; ++i) pts.push_back({4 * u(rng), 0.4 * u(rng), 0.75 + 0.01 * u(rng)});
+  std::vector<Eigen::Vector3d> centres;
+  for (int i = 0; i < 5; ++i) centres.push_back({i * 0.5, -2.5, 1.5});
+  const Eigen::Vector3d up(0, 0, 1);
+  GroundPlaneOptions o;
+  EXPECT_NEAR(FitGroundPlane(pts, centres, up, o).SignedDistance(Eigen::Vector3d::Zero()), 0, 0.02);
+  o.below_penalty = 0;  // inliers alone take the layer
+  EXPECT_NEAR(FitGroundPlane(pts, centres, up, o).SignedDistance(Eigen::Vector3d::Zero()), -0.75, 0.02);
+  o.below_penalty = -1;
+  EXPECT_THROW(o.Check(), Error);
+}
+
 TEST(GroundPlane, FailsClearlyWithoutGroundPoints) {
   std::vector<CameraView> views = {CameraAt({0, -2.5, 1.5}), CameraAt({1, -2.5, 1.5})};
   std::vector<Eigen::Vector3d> centres = {views[0].Center(), views[1].Center()};
