@@ -39,8 +39,10 @@ int BlobCentres::Near(const CameraView& view, const Eigen::Vector3d& X, const Fr
   // by chance but rarely near the centres of the blobs they land on.
   const double apple_px = o.apple_fraction * view.fx * o.apple_radius / z;
   const double reach = std::max({o.centre_fraction * max_radius_, apple_px, 2.0});
-  const int x0 = std::max(0, static_cast<int>((p.x() - reach) / cell_)), x1 = std::min(cols_ - 1, static_cast<int>((p.x() + reach) / cell_));
-  const int y0 = std::max(0, static_cast<int>((p.y() - reach) / cell_)), y1 = std::min(rows_ - 1, static_cast<int>((p.y() + reach) / cell_));
+  const int x0 = std::max(0, static_cast<int>((p.x() - reach) / cell_));
+  const int x1 = std::min(cols_ - 1, static_cast<int>((p.x() + reach) / cell_));
+  const int y0 = std::max(0, static_cast<int>((p.y() - reach) / cell_));
+  const int y1 = std::min(rows_ - 1, static_cast<int>((p.y() + reach) / cell_));
   double nearest = 1e300;
   int id = 0;
   for (int y = y0; y <= y1; ++y)
