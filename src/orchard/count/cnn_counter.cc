@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <thread>
 
 #include "orchard/core/error.h"
@@ -70,10 +71,14 @@ std::vector<std::vector<float>> CnnCounter::CountProbabilities(const std::vector
   for (size_t begin = 0; begin < bgr_patches.size(); begin += 64) {
     const size_t end = std::min(bgr_patches.size(), begin + 64);
     torch::Tensor p;
+    std::map<int, torch::Tensor> batch_of_size;  // letterboxed once per input size, not per network
     for (size_t n = 0; n < impl_->nets.size(); ++n) {
-      std::vector<cv::Mat> inputs;
-      for (size_t i = begin; i < end; ++i) inputs.push_back(nn::LetterboxPatch(bgr_patches[i], impl_->input_sizes[n]));
-      const torch::Tensor x = nn::ImagesToTensor(inputs);
+      torch::Tensor& x = batch_of_size[impl_->input_sizes[n]];
+      if (!x.defined()) {
+        std::vector<cv::Mat> inputs;
+        for (size_t i = begin; i < end; ++i) inputs.push_back(nn::LetterboxPatch(bgr_patches[i], impl_->input_sizes[n]));
+        x = nn::ImagesToTensor(inputs);
+      }
       torch::Tensor q = torch::softmax(impl_->nets[n]->forward(x), 1);
       // Mirroring the letterboxed input is what training's flip augmentation does.
       if (impl_->options.flip_average) q = 0.5 * (q + torch::softmax(impl_->nets[n]->forward(torch::flip(x, {3})), 1));

@@ -142,6 +142,28 @@ std::vector<double> Xs(const std::vector<Eigen::Vector3d>& pts, const Eigen::Iso
   return xs;
 }
 
+// The two sides' canopy profiles along the row (the back's through
+// `back_turn`), each over the bins its sparse points cover (1%..99%).
+struct AlongProfiles {
+  std::vector<double> front, back;
+  int f_lo = 0, f_hi = 0, b_lo = 0, b_hi = 0;
+};
+
+AlongProfiles MakeAlongProfiles(const SideCloud& front, const SideCloud& back,
+                                const std::vector<Eigen::Vector3d>& canopy_f,
+                                const std::vector<Eigen::Vector3d>& canopy_b, const Eigen::Isometry3d& back_turn,
+                                const RowRegistrationOptions& o) {
+  const std::vector<double> seen_f = Xs(front.sparse, Eigen::Isometry3d::Identity()),
+                            seen_b = Xs(back.sparse, back_turn);
+  auto bin = [&](double x) { return static_cast<int>(std::floor(x / o.profile_bin)); };
+  AlongProfiles a;
+  a.f_lo = bin(Quantile(seen_f, 0.01)), a.f_hi = bin(Quantile(seen_f, 0.99)) + 1;
+  a.b_lo = bin(Quantile(seen_b, 0.01)), a.b_hi = bin(Quantile(seen_b, 0.99)) + 1;
+  a.front = Profile(Xs(canopy_f, Eigen::Isometry3d::Identity()), a.f_lo, a.f_hi, o);
+  a.back = Profile(Xs(canopy_b, back_turn), a.b_lo, a.b_hi, o);
+  return a;
+}
+
 }  // namespace
 
 Levelling LevelOnSparseGround(SideCloud* side, const RowRegistrationOptions& o) {
@@ -209,14 +231,8 @@ double CanopyProfileCorrelation(const SideCloud& front, const SideCloud& back, c
   double face_f = 0, face_b = 0;
   const std::vector<Eigen::Vector3d> canopy_f = Canopy(front, o, &face_f), canopy_b = Canopy(back, o, &face_b);
   if (static_cast<int>(std::min(canopy_f.size(), canopy_b.size())) < o.min_canopy_points) return std::nan("");
-  const std::vector<double> seen_f = Xs(front.sparse, Eigen::Isometry3d::Identity()),
-                            seen_b = Xs(back.sparse, back_to_front);
-  auto bin = [&](double x) { return static_cast<int>(std::floor(x / o.profile_bin)); };
-  const int f_lo = bin(Quantile(seen_f, 0.01)), f_hi = bin(Quantile(seen_f, 0.99)) + 1;
-  const int b_lo = bin(Quantile(seen_b, 0.01)), b_hi = bin(Quantile(seen_b, 0.99)) + 1;
-  const std::vector<double> pf = Profile(Xs(canopy_f, Eigen::Isometry3d::Identity()), f_lo, f_hi, o),
-                            pb = Profile(Xs(canopy_b, back_to_front), b_lo, b_hi, o);
-  return Correlation(pf, f_lo, pb, b_lo, 0, std::max(f_lo, b_lo), std::min(f_hi, b_hi));
+  const AlongProfiles a = MakeAlongProfiles(front, back, canopy_f, canopy_b, back_to_front, o);
+  return Correlation(a.front, a.f_lo, a.back, a.b_lo, 0, std::max(a.f_lo, a.b_lo), std::min(a.f_hi, a.b_hi));
 }
 
 Registration RegisterSidesOnRow(const SideCloud& front, const SideCloud& back, const RowRegistrationOptions& o) {
@@ -241,12 +257,11 @@ Registration RegisterSidesOnRow(const SideCloud& front, const SideCloud& back, c
   // observe (all their sparse points: ground, canopy, next row), so that
   // the row's ends and gaps must line up, not just the canopy's texture.
   const Eigen::Isometry3d turn = BackToFrontTransform(heading_deg, 0, 0);
-  const std::vector<double> xf = Xs(canopy_f, Eigen::Isometry3d::Identity()), xb = Xs(canopy_b, turn);
-  const std::vector<double> seen_f = Xs(front.sparse, Eigen::Isometry3d::Identity()), seen_b = Xs(back.sparse, turn);
-  auto bin = [&](double x) { return static_cast<int>(std::floor(x / o.profile_bin)); };
-  const int f_lo = bin(Quantile(seen_f, 0.01)), f_hi = bin(Quantile(seen_f, 0.99)) + 1;
-  const int b_lo = bin(Quantile(seen_b, 0.01)), b_hi = bin(Quantile(seen_b, 0.99)) + 1;
-  const std::vector<double> pf = Profile(xf, f_lo, f_hi, o), pb = Profile(xb, b_lo, b_hi, o);
+  const std::vector<double> xf = Xs(canopy_f, Eigen::Isometry3d::Identity());
+  const AlongProfiles profiles = MakeAlongProfiles(front, back, canopy_f, canopy_b, turn, o);
+  const std::vector<double>& pf = profiles.front;
+  const std::vector<double>& pb = profiles.back;
+  const int f_lo = profiles.f_lo, f_hi = profiles.f_hi, b_lo = profiles.b_lo, b_hi = profiles.b_hi;
   // Only offsets at which the two camera paths overlap by min_overlap of
   // the shorter: both sides are meant to film the same stretch, and a row of
   // evenly spaced trees looks alike one tree further on.

@@ -84,12 +84,18 @@ class HalvesTask : public TrainingTask {
   torch::Tensor images_, labels_;
 };
 
-TEST(Trainer, LossFallsAndResumes) {
+// Training that runs every epoch (no early stop) without a progress bar.
+TrainerOptions QuietOptions(int epochs, int batch_size) {
   TrainerOptions options;
-  options.max_epochs = 6;
+  options.max_epochs = epochs;
   options.patience = 100;
-  options.batch_size = 8;
+  options.batch_size = batch_size;
   options.progress = false;
+  return options;
+}
+
+TEST(Trainer, LossFallsAndResumes) {
+  TrainerOptions options = QuietOptions(6, 8);
   options.state_dir = TempDir("resume");
   SetUpTorch(options);
   ResNet net(ResNetOptions{18, 4, 1, 2});
@@ -146,11 +152,7 @@ TEST(Trainer, WeightAverageArithmetic) {
 }
 
 TEST(Trainer, WeightAverageTrainsAndResumes) {
-  TrainerOptions options;
-  options.max_epochs = 3;
-  options.patience = 100;
-  options.batch_size = 8;
-  options.progress = false;
+  TrainerOptions options = QuietOptions(3, 8);
   options.ema_decay = 0.9;
   options.state_dir = TempDir("resume_ema");
   SetUpTorch(options);
@@ -165,11 +167,7 @@ TEST(Trainer, WeightAverageTrainsAndResumes) {
 }
 
 TEST(Trainer, CosineLearningRate) {
-  TrainerOptions options;
-  options.max_epochs = 4;
-  options.patience = 100;
-  options.batch_size = 16;
-  options.progress = false;
+  TrainerOptions options = QuietOptions(4, 16);
   options.cosine_lr = true;
   SetUpTorch(options);
   ResNet net(ResNetOptions{18, 4, 1, 2});
