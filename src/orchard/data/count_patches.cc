@@ -7,6 +7,7 @@
 #include <random>
 
 #include "orchard/core/error.h"
+#include "orchard/core/random.h"
 #include "orchard/core/file_io.h"
 
 namespace orchard {
@@ -61,9 +62,7 @@ std::vector<std::vector<int>> GroupTouchingBoxes(const std::vector<Box>& boxes, 
 std::vector<CountPatch> MakeCountPatches(const Dataset& dataset, const CountPatchOptions& options) {
   options.Check();
   std::mt19937_64 rng(options.seed);
-  auto uniform = [&rng](double lo, double hi) {
-    return lo + (hi - lo) * static_cast<double>(rng() >> 11) * (1.0 / 9007199254740992.0);
-  };
+  auto uniform = [&rng](double lo, double hi) { return UniformIn(rng, lo, hi); };
   std::vector<CountPatch> patches;
   for (const AnnotatedImage& image : dataset.images) {
     if (image.width <= 0 || image.height <= 0) Fail("image size unknown for ", image.name);

@@ -6,16 +6,9 @@
 #include <opencv2/imgproc.hpp>
 
 #include "orchard/core/error.h"
+#include "orchard/core/random.h"
 
 namespace orchard::nn {
-namespace {
-
-double Uniform(std::mt19937_64& rng, double lo, double hi) {
-  return lo + (hi - lo) * static_cast<double>(rng() >> 11) * (1.0 / 9007199254740992.0);
-}
-
-}  // namespace
-
 void CopyPasteOptions::Check() const {
   ORCHARD_CHECK_OPTION(probability >= 0 && probability <= 1, "copy-paste probability must be in [0, 1], got ",
                        probability);
@@ -56,9 +49,9 @@ cv::Mat ComposeCluster(const std::vector<const AppleSprite*>& sprites, const cv:
     double best_clearance = -1e300;
     for (int attempt = 0; attempt < 50; ++attempt) {
       const size_t j = rng() % k;
-      const double angle = Uniform(rng, 0, 2 * M_PI);
+      const double angle = UniformIn(rng, 0, 2 * M_PI);
       const double distance =
-          (sprites[j]->radius + sprites[k]->radius) * Uniform(rng, options.min_separation, options.max_separation);
+          (sprites[j]->radius + sprites[k]->radius) * UniformIn(rng, options.min_separation, options.max_separation);
       const cv::Point2d c = centres[j] + distance * cv::Point2d(std::cos(angle), std::sin(angle));
       double clearance = 1e300;  // smallest distance to an earlier apple, relative to the allowed
       for (size_t i = 0; i < k; ++i) {
@@ -140,7 +133,7 @@ cv::Mat CopyPasteSource::Compose(int count, std::mt19937_64& rng) const {
     const AppleSprite& sprite = photo.sprites[rng() % photo.sprites.size()];
     if (k == 0) first_radius = sprite.radius;
     const double scale =
-        k == 0 ? 1.0 : first_radius / sprite.radius * Uniform(rng, 1 - options_.size_jitter, 1 + options_.size_jitter);
+        k == 0 ? 1.0 : first_radius / sprite.radius * UniformIn(rng, 1 - options_.size_jitter, 1 + options_.size_jitter);
     AppleSprite copy;
     const cv::Size size(std::max(4, static_cast<int>(std::lround(sprite.bgr.cols * scale))),
                         std::max(4, static_cast<int>(std::lround(sprite.bgr.rows * scale))));

@@ -7,6 +7,7 @@
 #include <set>
 
 #include "orchard/core/error.h"
+#include "orchard/core/random.h"
 #include "orchard/core/file_io.h"
 #include "orchard/data/split.h"
 #include "orchard/nn/checkpoint.h"
@@ -15,8 +16,6 @@ namespace orchard::nn {
 namespace {
 
 constexpr int kClasses = 7;
-
-double Uniform01(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * (1.0 / 9007199254740992.0); }
 
 class CounterTask : public TrainingTask {
  public:

@@ -6,15 +6,9 @@
 #include <opencv2/imgproc.hpp>
 
 #include "orchard/core/error.h"
+#include "orchard/core/random.h"
 
 namespace orchard::nn {
-namespace {
-
-double Uniform(std::mt19937_64& rng, double lo, double hi) {
-  return lo + (hi - lo) * static_cast<double>(rng() >> 11) * (1.0 / 9007199254740992.0);
-}
-
-}  // namespace
 
 cv::Mat LetterboxPatch(const cv::Mat& bgr, int size) {
   if (bgr.empty()) Fail("empty image patch");
@@ -47,12 +41,12 @@ cv::Mat AugmentPatch(const cv::Mat& image, const PatchAugmentation& augmentation
   cv::Mat out = image.clone();
   if (augmentation.flip && (rng() & 1)) cv::flip(out, out, 1);
   if (augmentation.max_rotation_deg > 0) {
-    const double angle = Uniform(rng, -augmentation.max_rotation_deg, augmentation.max_rotation_deg);
+    const double angle = UniformIn(rng, -augmentation.max_rotation_deg, augmentation.max_rotation_deg);
     const cv::Mat rotation = cv::getRotationMatrix2D(cv::Point2f(out.cols / 2.0f, out.rows / 2.0f), angle, 1.0);
     cv::warpAffine(out, out, rotation, out.size(), cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar::all(0));
   }
   if (augmentation.max_blur_sigma > 0 && (rng() & 1)) {
-    const double sigma = Uniform(rng, 0.0, augmentation.max_blur_sigma);
+    const double sigma = UniformIn(rng, 0.0, augmentation.max_blur_sigma);
     if (sigma > 0.1) cv::GaussianBlur(out, out, cv::Size(0, 0), sigma);
   }
   return out;

@@ -8,6 +8,8 @@
 #include <cstdint>
 #include <random>
 
+#include "orchard/core/random.h"
+
 namespace orchard::synth {
 
 class Random {
@@ -15,7 +17,7 @@ class Random {
   explicit Random(std::uint64_t seed) : engine_(seed) {}
 
   // Uniform in [0, 1) with 53 random bits.
-  double Uniform() { return static_cast<double>(engine_() >> 11) * (1.0 / 9007199254740992.0); }
+  double Uniform() { return Uniform01(engine_); }
   double Uniform(double lo, double hi) { return lo + (hi - lo) * Uniform(); }
   // Integer in [lo, hi].
   int UniformInt(int lo, int hi) {
