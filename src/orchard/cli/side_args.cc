@@ -54,6 +54,10 @@ void AddSideOptions(CLI::App* cmd, SideOptions* options) {
   cmd->add_option("--max-lost-fraction", o.clusters.max_lost_fraction,
                   "Remove clusters whose points land mostly on blobs other clusters win (1 = keep all)")
       ->capture_default_str();
+  cmd->add_option("--merge-shared", o.clusters.merge_shared_fraction,
+                  "Join a cluster to a larger one when at least this fraction of its votes fall on blobs both vote "
+                  "for (0 = never)")
+      ->capture_default_str();
   cmd->add_option("--assign-near", o.clusters.assign_near, "A point off every blob votes for the blob whose centre is near")
       ->capture_default_str();
   cmd->add_option("--fallen-height", o.clusters.fallen_height, "Clusters lower than this (m) are fallen apples")

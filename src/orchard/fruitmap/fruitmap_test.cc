@@ -233,6 +233,27 @@ TEST(EvidenceStatus, FewViewsAndGhostsAreRemoved) {
   EXPECT_THROW(o.Check(), Error);
 }
 
+TEST(MergeSharedComponents, JoinsADuplicateToTheClusterWhoseBlobsItShares) {
+  // Component 0: an apple seen in 4 frames (blob 1, 5 points each).
+  // Component 1: the same apple triangulated again 20 cm off; 3 of its 4
+  // votes fall on component 0's blobs. Component 2: a neighbour with a blob
+  // of its own in every frame and one vote on blob 1.
+  std::vector<BlobVotes> votes(4);
+  for (int f = 0; f < 4; ++f) {
+    votes[f][1][0] = 5;
+    votes[f][2][2] = 3;
+  }
+  for (int f = 0; f < 3; ++f) votes[f][1][1] = 1;
+  votes[3][3][1] = 1;
+  votes[0][1][2] = 1;
+  EXPECT_EQ(MergeSharedComponents(votes, 3, 0.5), (std::vector<int>{0, 0, 2}));
+  EXPECT_EQ(MergeSharedComponents(votes, 3, 0.8), (std::vector<int>{0, 1, 2}));  // 3 of 4 is too few
+  // A chain: 3 shares with 1, which joins 0; 3 ends in 0 too.
+  votes[0][4][3] = 1;
+  votes[0][4][1] = 1;
+  EXPECT_EQ(MergeSharedComponents(votes, 4, 0.5), (std::vector<int>{0, 0, 2, 0}));
+}
+
 TEST(ParseGroundPlane, NumbersAndErrors) {
   const Plane p = ParseGroundPlane("0,0,2,-1");
   EXPECT_NEAR(p.normal.z(), 1, 1e-12);

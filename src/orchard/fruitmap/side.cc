@@ -4,6 +4,7 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <numeric>
 #include <set>
 #include <sstream>
 
@@ -64,6 +65,40 @@ double DensestFruitDistance(const std::vector<std::pair<double, double>>& distan
 
 }  // namespace
 
+std::vector<int> MergeSharedComponents(const std::vector<BlobVotes>& votes, int k, double fraction) {
+  std::vector<int> total(k, 0);
+  std::vector<std::map<int, int>> shared(k);  // component -> other -> own votes on blobs both vote for
+  for (const auto& frame_votes : votes)
+    for (const auto& [blob, by_component] : frame_votes)
+      for (const auto& [a, points] : by_component) {
+        total[a] += points;
+        for (const auto& other : by_component)
+          if (other.first != a) shared[a][other.first] += points;
+      }
+  std::vector<int> parent(k);
+  std::iota(parent.begin(), parent.end(), 0);
+  const auto find = [&](int x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  // Smallest first, so a chain of duplicates ends in the best-supported one.
+  std::vector<int> order(k);
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return total[a] < total[b]; });
+  for (int a : order) {
+    int best = -1, best_shared = 0;
+    for (const auto& [b, points] : shared[a])
+      if (total[b] > total[a] && points > best_shared) best = b, best_shared = points;
+    if (best >= 0 && best_shared >= fraction * total[a]) {
+      const int ra = find(a), rb = find(best);
+      if (ra != rb) parent[ra] = rb;
+    }
+  }
+  std::vector<int> root(k);
+  for (int c = 0; c < k; ++c) root[c] = find(c);
+  return root;
+}
+
 void ClusterOptions::Check() const {
   points.Check();
   ORCHARD_CHECK_OPTION(link_distance > 0, "link distance must be positive, got ", link_distance);
@@ -71,6 +106,8 @@ void ClusterOptions::Check() const {
   ORCHARD_CHECK_OPTION(min_views >= 1, "min cluster views must be at least 1, got ", min_views);
   ORCHARD_CHECK_OPTION(max_lost_fraction > 0 && max_lost_fraction <= 1, "max lost fraction must be in (0, 1], got ",
                        max_lost_fraction);
+  ORCHARD_CHECK_OPTION(merge_shared_fraction >= 0 && merge_shared_fraction <= 1,
+                       "merge shared fraction must be in [0, 1], got ", merge_shared_fraction);
   ORCHARD_CHECK_OPTION(best_views >= 1, "best views must be at least 1, got ", best_views);
   ORCHARD_CHECK_OPTION(row_distance >= 0, "row distance must be >= 0, got ", row_distance);
   ORCHARD_CHECK_OPTION(next_row_margin > 0, "next-row margin must be positive, got ", next_row_margin);
@@ -98,6 +135,37 @@ ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std
   for (const auto& p : r.points) xyz.push_back(p.xyz);
   int k = 0;
   r.point_cluster = ConnectedComponents3D(xyz, o.link_distance, &k);
+  // Point-on-blob votes of every frame: blob -> component -> points. A point
+  // votes for the blob under it, else for a blob whose centre it is near: a
+  // partly hidden apple's visible piece is small and off its centre.
+  const int n = static_cast<int>(frames.size());
+  std::vector<BlobVotes> votes(n);
+  for (int f = 0; f < n; ++f) {
+    const BlobCentres centres(frames[f]);
+    for (size_t i = 0; i < xyz.size(); ++i) {
+      Eigen::Vector2d p;
+      if (views[f].Depth(xyz[i]) < o.points.min_depth || !views[f].Project(xyz[i], &p)) continue;
+      int id = frames[f].labels(static_cast<int>(p.y()), static_cast<int>(p.x()));
+      if (id <= 0 && o.assign_near) id = centres.Near(views[f], xyz[i], o.points);
+      if (id > 0) ++votes[f][id][r.point_cluster[i]];
+    }
+  }
+  if (o.merge_shared_fraction > 0) {
+    const std::vector<int> merged = MergeSharedComponents(votes, k, o.merge_shared_fraction);
+    std::vector<int> renumber(k, -1);  // keep ids numbered by first point
+    int merged_k = 0;
+    for (int& c : r.point_cluster) {
+      if (renumber[merged[c]] < 0) renumber[merged[c]] = merged_k++;
+      c = renumber[merged[c]];
+    }
+    for (auto& frame_votes : votes)
+      for (auto& [blob, by_component] : frame_votes) {
+        std::map<int, int> by_cluster;
+        for (const auto& [c, points] : by_component) by_cluster[renumber[merged[c]]] += points;
+        by_component = std::move(by_cluster);
+      }
+    k = merged_k;
+  }
   r.clusters.resize(k);
   for (int c = 0; c < k; ++c) r.clusters[c].id = c + 1;
   for (size_t i = 0; i < xyz.size(); ++i) r.clusters[r.point_cluster[i]].points.push_back(static_cast<int>(i));
@@ -109,23 +177,14 @@ ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std
     }
     c.centre /= static_cast<double>(c.points.size());
   }
-  // Each blob of each frame goes to the cluster with most points landing on it.
-  const int n = static_cast<int>(frames.size());
+  // Each blob of each frame goes to the cluster with most points landing on
+  // it; clusters below the minimum size do not vote.
   for (int f = 0; f < n; ++f) {
-    const BlobCentres centres(frames[f]);
-    std::map<int, std::map<int, int>> votes;  // blob -> cluster -> points
-    for (size_t i = 0; i < xyz.size(); ++i) {
-      if (static_cast<int>(r.clusters[r.point_cluster[i]].points.size()) < o.min_points) continue;
-      Eigen::Vector2d p;
-      if (views[f].Depth(xyz[i]) < o.points.min_depth || !views[f].Project(xyz[i], &p)) continue;
-      // The blob under the point, else a blob whose centre is near it: a
-      // partly hidden apple's visible piece is small and off its centre.
-      int id = frames[f].labels(static_cast<int>(p.y()), static_cast<int>(p.x()));
-      if (id <= 0 && o.assign_near) id = centres.Near(views[f], xyz[i], o.points);
-      if (id > 0) ++votes[id][r.point_cluster[i]];
-    }
     std::map<int, size_t> view_of;  // cluster -> index in its views
-    for (const auto& [blob, by_cluster] : votes) {
+    for (auto [blob, by_cluster] : votes[f]) {
+      for (auto it = by_cluster.begin(); it != by_cluster.end();)
+        it = static_cast<int>(r.clusters[it->first].points.size()) < o.min_points ? by_cluster.erase(it) : std::next(it);
+      if (by_cluster.empty()) continue;
       const auto best = std::max_element(by_cluster.begin(), by_cluster.end(),
                                          [](const auto& a, const auto& b) { return a.second < b.second; });
       for (const auto& [cluster, points] : by_cluster)

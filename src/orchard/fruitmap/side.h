@@ -5,6 +5,7 @@
 #pragma once
 
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -43,6 +44,13 @@ struct ClusterOptions {
   // point-on-blob votes) on blobs that other clusters win are ghosts of
   // those clusters' apples: wrong pairings offset in depth (1 = keep all).
   double max_lost_fraction = 1.0;
+  // Clusters whose points land on the same blobs are one apple triangulated
+  // twice: the centre of a partly hidden apple's visible piece shifts as the
+  // leaves in front of it change, which moves a short-baseline pairing
+  // 10-30 cm in depth. A cluster with at least this fraction of its
+  // point-on-blob votes on blobs that a cluster with more votes also votes
+  // for joins that cluster (0 = never).
+  double merge_shared_fraction = 0;
   // A point votes for the blob under it, or else (when true) for the blob
   // whose centre it is near, as in the support check.
   bool assign_near = true;
@@ -100,6 +108,15 @@ struct ClusterResult {
 // "kept", or why the cluster's own evidence (points, views, votes; not its
 // place in the row) is too weak: too_few_points, no_views, few_views, ghost.
 std::string EvidenceStatus(const FruitCluster& cluster, const ClusterOptions& options);
+
+// Point-on-blob votes of one frame: blob id -> cluster (or component) -> points.
+using BlobVotes = std::map<int, std::map<int, int>>;
+
+// Joins the components (0..k-1) that are one apple triangulated twice: a
+// component with at least `fraction` of its votes on blobs that a component
+// with more votes also votes for joins the one it shares most with (chains
+// end in the best-supported one). Returns each component's representative.
+std::vector<int> MergeSharedComponents(const std::vector<BlobVotes>& votes, int k, double fraction);
 
 // The 3D stage on frames with known (metric) poses and a ground plane.
 ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std::vector<FruitFrame>& frames,
