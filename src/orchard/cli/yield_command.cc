@@ -43,6 +43,11 @@ void AddYieldCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--no-row-registration{false}", o.row_registration,
                 "Register the sides from their shared fruit clusters only (no fallback to the row's ground and canopy)");
+  cmd->add_flag("--no-face-check{false}", o.face_check,
+                "Do not check that the two videos show opposite faces of the row (feature matching)");
+  cmd->add_option("--face-max-inliers", o.faces.max_inliers,
+                  "Matched features between a front and a back frame above which they show the same face")
+      ->capture_default_str();
   cmd->add_option("--intersection-distance", o.shared.intersection_distance,
                   "Fruit points of the two sides closer than this (m) are the same apple (shared count)")
       ->capture_default_str();

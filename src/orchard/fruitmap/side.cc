@@ -533,6 +533,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   s.single_frame_sum = r.single_frame_sum;
   s.frames_used = static_cast<int>(views.size());
   s.frames_registered = static_cast<int>(views.size());
+  s.frame_paths = image_paths;
   std::map<std::string, int> removed;
   for (const auto& c : r.clusters) {
     if (c.status == "kept")

@@ -164,6 +164,7 @@ struct SideSummary {
   // fruit per frame (detection and counting, or the cache), the 3D stage,
   // writing the outputs.
   double poses_s = 0, fruit_s = 0, clusters_s = 0, outputs_s = 0;
+  std::vector<fs::path> frame_paths;  // the frames used, in sequence order
 };
 
 // Runs the side end to end and writes side.json, clusters.csv, fruit.ply,

@@ -23,6 +23,7 @@ void YieldOptions::Check() const {
   side.Check();
   registration.Check();
   row.Check();
+  faces.Check();
   shared.Check();
   ORCHARD_CHECK_OPTION(bin_length > 0, "bin length must be positive, got ", bin_length);
   ORCHARD_CHECK_OPTION(report_frames >= 0, "report frames must be >= 0, got ", report_frames);
@@ -103,6 +104,18 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
 
   // 3: registration.
   spdlog::info("[yield 3/4] registering the two sides");
+  Json face_json;
+  if (o.face_check) {
+    // Before the registration, which can align a side with its own mirror image.
+    const FaceCheck faces = CheckOppositeFaces(y.front_side.frame_paths, y.back_side.frame_paths, o.faces);
+    face_json = {{"best_inliers", faces.best_inliers}, {"max_inliers", o.faces.max_inliers},
+                 {"front_frame", faces.front_frame.filename().string()},
+                 {"back_frame", faces.back_frame.filename().string()}};
+    if (faces.same_face)
+      Fail("the front and back videos show the same face of the row (frames ", faces.front_frame.filename().string(),
+           " and ", faces.back_frame.filename().string(), " share ", faces.best_inliers,
+           " matched features, opposite faces share few): film the back from the other side of the row");
+  }
   SideCloud front_cloud = LoadSideCloud(front.out, "front");
   SideCloud back_cloud = LoadSideCloud(back.out, "back");
   RowRegistrationOptions row_options = o.row;
@@ -230,6 +243,7 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
   };
   if (!given_check.is_null()) j["alignment"]["minus_given_poses"] = given_check;
   if (!levelling.empty()) j["alignment"]["levelling"] = levelling;
+  if (!face_json.is_null()) j["alignment"]["face_check"] = face_json;
   j["settings"] = {
       {"front", in.front.input.string()},
       {"back", in.back.input.string()},

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "orchard/fruitmap/side.h"
+#include "orchard/merge/face_check.h"
 #include "orchard/merge/registration.h"
 #include "orchard/merge/row_registration.h"
 #include "orchard/merge/shared_count.h"
@@ -33,6 +34,10 @@ struct YieldOptions {
   // (row_registration.h). Its camera height is taken from `side`.
   bool row_registration = true;
   RowRegistrationOptions row;
+  // The two videos must show opposite faces of the row (face_check.h); off
+  // for the rare rows whose two faces look alike to a feature matcher.
+  bool face_check = true;
+  FaceCheckOptions faces;
   SharedCountOptions shared;
   // Length (m) of the along-row bins of the yield map.
   double bin_length = 1.0;
