@@ -78,6 +78,10 @@ void AddFruitOptions(CLI::App* cmd, FruitArgs* a) {
   cmd->add_option("--counter", a->counter, "Apples per blob: cnn, gmm, or blob (one each)")->capture_default_str();
   cmd->add_option("--counter-model", a->counter_model, "Counter model (default: the shipped one)");
   cmd->add_option("--threads", a->threads, "Detector and counter threads (0 = all cores)")->capture_default_str();
+  cmd->add_option("--min-blob-pixels", a->min_blob_pixels, "Detector blobs smaller than this (pixels) are dropped")
+      ->capture_default_str();
+  cmd->add_option("--unet-threshold", a->unet_threshold, "A pixel is apple above this U-Net probability")
+      ->capture_default_str();
 }
 
 void SetUpFruit(const FruitArgs& a, const std::string& masks, FruitTools* tools, SideInputs* in) {
@@ -91,12 +95,18 @@ void SetUpFruit(const FruitArgs& a, const std::string& masks, FruitTools* tools,
       choice.method = a.detector;
       choice.model = a.model;
       choice.threads = a.threads;
+      choice.blobs.min_pixels = a.min_blob_pixels;
+      choice.unet_threshold = a.unet_threshold;
       tools->detector = MakeDetector(choice);
     }
     in->detector = tools->detector.get();
     const fs::path model = a.model.empty() ? DefaultDetectorModel(a.detector) : fs::path(a.model);
     // The fingerprint redoes the per-frame cache when a model is retrained in place.
     in->detector_name = a.detector + ":" + model.string() + "@" + FileFingerprint(model);
+    // Non-default settings change the blobs, so they are part of the cache key.
+    if (a.min_blob_pixels != BlobOptions().min_pixels)
+      in->detector_name += " min_blob_pixels=" + std::to_string(a.min_blob_pixels);
+    if (a.detector == "unet" && a.unet_threshold != 0.5) in->detector_name += " threshold=" + std::to_string(a.unet_threshold);
   }
   if (a.counter != "blob" && !tools->counter) {
     CounterChoice choice;

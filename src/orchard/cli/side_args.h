@@ -18,6 +18,13 @@ namespace orchard {
 struct FruitArgs {
   std::string detector = "gmm", counter = "cnn", model, counter_model;
   int threads = 0;
+  // Detector blobs smaller than this are dropped. Lower than a photo
+  // detector's 100 px: the 3D stage lives on the small pieces of partly
+  // hidden apples (20 px is the generator's "visible"), and its multi-view
+  // support removes specks (seed 11, U-Net, COLMAP: 163 apples of 237
+  // visible with 100 px, 206 with 30, 226 with 15; docs/yield.md).
+  int min_blob_pixels = 20;
+  double unet_threshold = 0.5;                     // apple probability of a U-Net pixel
 };
 
 // The detector and counter objects a SideInputs points to.
