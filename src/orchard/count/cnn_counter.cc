@@ -114,4 +114,17 @@ BlobCount CnnCounter::Count(const cv::Mat& bgr_patch, const cv::Mat1b& fruit_mas
   return result;
 }
 
+std::vector<BlobCount> CnnCounter::CountMany(const std::vector<cv::Mat>& bgr_patches,
+                                             const std::vector<cv::Mat1b>& fruit_masks) {
+  if (!fruit_masks.empty() && fruit_masks.size() != bgr_patches.size())
+    Fail("counter: ", fruit_masks.size(), " fruit masks for ", bgr_patches.size(), " patches");
+  for (size_t i = 0; i < fruit_masks.size(); ++i)
+    if (!fruit_masks[i].empty() && fruit_masks[i].size() != bgr_patches[i].size())
+      Fail("fruit mask and patch differ in size");
+  std::vector<BlobCount> counts;
+  if (bgr_patches.empty()) return counts;
+  for (int c : CountBatch(bgr_patches)) counts.push_back(BlobCount{c, {}});
+  return counts;
+}
+
 }  // namespace orchard

@@ -68,6 +68,13 @@ TEST(CnnCounter, TrainsReloadsAndCounts) {
   CnnCounter again(dir / "counter.pt", 1);
   EXPECT_EQ(again.CountBatch(test), counts);
   EXPECT_EQ(again.Count(test[4], cv::Mat1b()).count, counts[4]);
+  // The side stage's per-frame call, through the Counter interface.
+  Counter& as_counter = again;
+  const std::vector<BlobCount> many = as_counter.CountMany(test, {});
+  ASSERT_EQ(many.size(), counts.size());
+  for (size_t i = 0; i < many.size(); ++i) EXPECT_EQ(many[i].count, counts[i]);
+  EXPECT_TRUE(as_counter.CountMany({}, {}).empty());
+  EXPECT_THROW(as_counter.CountMany(test, {cv::Mat1b(3, 3)}), Error);  // one mask for 30 patches
 }
 
 TEST(CnnCounter, FlipAverageIsMirrorInvariant) {

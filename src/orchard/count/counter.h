@@ -26,6 +26,19 @@ class Counter {
   // pixels (non-zero), same size, or empty when the counter must find them
   // itself. Throws orchard::Error on an empty patch or mismatched sizes.
   virtual BlobCount Count(const cv::Mat& bgr_patch, const cv::Mat1b& fruit_mask) = 0;
+  // Many blobs at once (`fruit_masks` empty, or one per patch). The CNN
+  // counter runs them as one batch: one network pass per frame instead of
+  // one per blob, which matters most when other jobs share the cores.
+  virtual std::vector<BlobCount> CountMany(const std::vector<cv::Mat>& bgr_patches,
+                                           const std::vector<cv::Mat1b>& fruit_masks);
 };
+
+inline std::vector<BlobCount> Counter::CountMany(const std::vector<cv::Mat>& bgr_patches,
+                                                const std::vector<cv::Mat1b>& fruit_masks) {
+  std::vector<BlobCount> counts;
+  for (size_t i = 0; i < bgr_patches.size(); ++i)
+    counts.push_back(Count(bgr_patches[i], fruit_masks.empty() ? cv::Mat1b() : fruit_masks.at(i)));
+  return counts;
+}
 
 }  // namespace orchard

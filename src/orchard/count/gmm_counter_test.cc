@@ -28,6 +28,12 @@ TEST(GmmCounter, CountsDiscsInABlob) {
   EXPECT_NEAR(one.fruits[0].centre.x, 70, 3.0);
   EXPECT_NEAR(one.fruits[0].centre.y, 50, 3.0);
   EXPECT_NEAR(one.fruits[0].radius, 25, 3.0);
+  // Many blobs at once (the interface's default: one by one).
+  const std::vector<BlobCount> many =
+      counter.CountMany({patch, patch}, {Discs({{80, 60}}, 20), Discs({{30, 30}, {130, 30}, {80, 95}}, 12)});
+  ASSERT_EQ(many.size(), 2u);
+  EXPECT_EQ(many[0].count, 1);
+  EXPECT_EQ(many[1].count, 3);
 }
 
 TEST(GmmCounter, SeparationKeepsLargeDiscsWhole) {

@@ -318,13 +318,16 @@ FruitFrame FruitFromInstanceMask(const cv::Mat& mask) {
 void CountBlobs(const cv::Mat& image, Counter* counter, FruitFrame* frame) {
   frame->counts.assign(frame->blobs.size(), 1);
   if (!counter) return;
-  for (size_t i = 0; i < frame->blobs.size(); ++i) {
-    const Blob& b = frame->blobs[i];
+  std::vector<cv::Mat> patches;
+  std::vector<cv::Mat1b> fruit;
+  for (const Blob& b : frame->blobs) {
     const cv::Rect rect(static_cast<int>(b.box.x1), static_cast<int>(b.box.y1),
                         static_cast<int>(b.box.x2 - b.box.x1), static_cast<int>(b.box.y2 - b.box.y1));
-    const cv::Mat1b fruit = frame->labels(rect) == b.id;
-    frame->counts[i] = counter->Count(image(rect).clone(), fruit).count;
+    patches.push_back(image(rect).clone());
+    fruit.push_back(frame->labels(rect) == b.id);
   }
+  const std::vector<BlobCount> counts = counter->CountMany(patches, fruit);
+  for (size_t i = 0; i < counts.size(); ++i) frame->counts[i] = counts[i].count;
 }
 
 // Detections and counts of one frame, from the cache when it was made by the
