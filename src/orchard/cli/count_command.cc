@@ -96,15 +96,13 @@ void AddCountCommand(CLI::App& app) {
           cv::Mat ids32;
           ids.convertTo(ids32, CV_32S);
           for (const Blob& b : blobs) {
-            // The CNN reads the blob with the margin its training patches had.
-            const CountPatchOptions patch_options;
-            const double m = cnn ? std::max<double>(patch_options.min_margin,
-                                                    patch_options.margin * std::max(b.box.Width(), b.box.Height()))
-                                 : 0.0;
-            const cv::Rect roi = cv::Rect(static_cast<int>(std::floor(b.box.x1 - m)), static_cast<int>(std::floor(b.box.y1 - m)),
-                                          static_cast<int>(std::ceil(b.box.Width() + 2 * m)),
-                                          static_cast<int>(std::ceil(b.box.Height() + 2 * m))) &
-                                 cv::Rect(0, 0, image.cols, image.rows);
+            // A CNN reads the blob with the margin its training patches had.
+            const cv::Rect roi = counter->ReadsPatchMargin()
+                                     ? ClusterPatchRect(b.box, image.cols, image.rows)
+                                     : cv::Rect(static_cast<int>(std::floor(b.box.x1)), static_cast<int>(std::floor(b.box.y1)),
+                                                static_cast<int>(std::ceil(b.box.Width())),
+                                                static_cast<int>(std::ceil(b.box.Height()))) &
+                                           cv::Rect(0, 0, image.cols, image.rows);
             if (roi.empty()) Fail(args->blobs, ": blob ", b.id, " of ", name, " lies outside the image");
             cv::Mat1b mask = ids32(roi) == b.id;
             const BlobCount c = counter->Count(image(roi), mask);

@@ -40,6 +40,8 @@ class CnnCounter : public Counter {
   // The fruit mask is not used: the network reads the whole patch. Fruits are
   // not located (BlobCount::fruits stays empty).
   BlobCount Count(const cv::Mat& bgr_patch, const cv::Mat1b& fruit_mask) override;
+  // Trained on cluster patches cut with a margin (data/count_patches.h).
+  bool ReadsPatchMargin() const override { return true; }
   std::vector<BlobCount> CountMany(const std::vector<cv::Mat>& bgr_patches,
                                    const std::vector<cv::Mat1b>& fruit_masks) override;
 

@@ -26,6 +26,9 @@ class Counter {
   // pixels (non-zero), same size, or empty when the counter must find them
   // itself. Throws orchard::Error on an empty patch or mismatched sizes.
   virtual BlobCount Count(const cv::Mat& bgr_patch, const cv::Mat1b& fruit_mask) = 0;
+  // Whether the counter reads a blob with the margin of its training patches
+  // around it (ClusterPatchRect) rather than the blob's own box.
+  virtual bool ReadsPatchMargin() const { return false; }
   // Many blobs at once (`fruit_masks` empty, or one per patch). The CNN
   // counter runs them as one batch: one network pass per frame instead of
   // one per blob, which matters most when other jobs share the cores.

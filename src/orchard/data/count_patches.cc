@@ -33,6 +33,11 @@ cv::Rect ClampedRect(double x1, double y1, double x2, double y2, int width, int 
 
 }  // namespace
 
+cv::Rect ClusterPatchRect(const Box& box, int image_width, int image_height, const CountPatchOptions& options) {
+  const double m = std::max<double>(options.min_margin, options.margin * std::max(box.Width(), box.Height()));
+  return ClampedRect(box.x1 - m, box.y1 - m, box.x2 + m, box.y2 + m, image_width, image_height);
+}
+
 void CountPatchOptions::Check() const {
   ORCHARD_CHECK_OPTION(touch_tolerance >= 0, "touch tolerance must be >= 0, got ", touch_tolerance);
   ORCHARD_CHECK_OPTION(margin >= 0 && margin <= 2, "margin must be in [0, 2], got ", margin);
@@ -78,8 +83,7 @@ std::vector<CountPatch> MakeCountPatches(const Dataset& dataset, const CountPatc
         any_real |= std::min(boxes[i].Width(), boxes[i].Height()) >= options.min_box_side;
       }
       if (!any_real || static_cast<int>(group.size()) > options.max_count) continue;
-      const double m = std::max<double>(options.min_margin, options.margin * std::max(u.Width(), u.Height()));
-      cv::Rect crop = ClampedRect(u.x1 - m, u.y1 - m, u.x2 + m, u.y2 + m, image.width, image.height);
+      const cv::Rect crop = ClusterPatchRect(u, image.width, image.height, options);
       if (crop.width < 2 || crop.height < 2) continue;
       patches.push_back({image.name, crop, static_cast<int>(group.size())});
       sides.push_back(std::max(crop.width, crop.height));

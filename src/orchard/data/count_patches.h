@@ -39,6 +39,12 @@ struct CountPatch {
   int count = 0;
 };
 
+// The crop of a cluster box as the counting patches cut it: `options.margin`
+// of its longer side (at least `min_margin` pixels) on every side, clamped to
+// the image. A counter trained on such patches reads a detector's blob the
+// same way.
+cv::Rect ClusterPatchRect(const Box& box, int image_width, int image_height, const CountPatchOptions& options = {});
+
 // Groups of box indices that touch or overlap (transitively), each sorted.
 std::vector<std::vector<int>> GroupTouchingBoxes(const std::vector<Box>& boxes, double tolerance);
 
