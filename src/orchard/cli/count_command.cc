@@ -1,5 +1,6 @@
 // `orchard count`: apples per blob (and per image) from detected blobs, or per
 // patch from a folder of blob patches.
+#include <algorithm>
 #include <map>
 #include <sstream>
 
@@ -73,10 +74,19 @@ void AddCountCommand(CLI::App& app) {
     if (!args->in.empty()) {
       // A patch folder keeps its images beside counts.csv or in images/.
       const fs::path patch_dir = fs::is_directory(fs::path(args->in) / "images") ? fs::path(args->in) / "images" : fs::path(args->in);
-      for (const fs::path& p : ListImages(patch_dir)) {
-        const BlobCount c = counter->Count(ReadImage(p), cv::Mat1b());
-        counts.push_back({p.filename().string(), c.count});
-        AppendFruits(p.filename().string(), 1, c, 0, 0, &fruits);
+      // In chunks, so the CNN counts a batch per pass and memory stays bounded.
+      const std::vector<fs::path> paths = ListImages(patch_dir);
+      constexpr size_t kChunk = 256;
+      for (size_t begin = 0; begin < paths.size(); begin += kChunk) {
+        const size_t end = std::min(paths.size(), begin + kChunk);
+        std::vector<cv::Mat> patches;
+        for (size_t i = begin; i < end; ++i) patches.push_back(ReadImage(paths[i]));
+        const std::vector<BlobCount> chunk = counter->CountMany(patches, {});
+        for (size_t i = begin; i < end; ++i) {
+          const BlobCount& c = chunk[i - begin];
+          counts.push_back({paths[i].filename().string(), c.count});
+          AppendFruits(paths[i].filename().string(), 1, c, 0, 0, &fruits);
+        }
       }
       if (counts.empty()) Fail("no patches in ", args->in);
     } else {
