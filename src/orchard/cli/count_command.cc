@@ -105,6 +105,9 @@ void AddCountCommand(CLI::App& app) {
             Fail("mask of ", name, " is ", ids.cols, "x", ids.rows, ", the image ", image.cols, "x", image.rows);
           cv::Mat ids32;
           ids.convertTo(ids32, CV_32S);
+          std::vector<cv::Mat> patches;
+          std::vector<cv::Mat1b> fruit_masks;
+          std::vector<cv::Rect> rois;
           for (const Blob& b : blobs) {
             // A CNN reads the blob with the margin its training patches had.
             const cv::Rect roi = counter->ReadsPatchMargin()
@@ -114,10 +117,15 @@ void AddCountCommand(CLI::App& app) {
                                                 static_cast<int>(std::ceil(b.box.Height()))) &
                                            cv::Rect(0, 0, image.cols, image.rows);
             if (roi.empty()) Fail(args->blobs, ": blob ", b.id, " of ", name, " lies outside the image");
-            cv::Mat1b mask = ids32(roi) == b.id;
-            const BlobCount c = counter->Count(image(roi), mask);
-            total += c.count;
-            AppendFruits(name, b.id, c, roi.x, roi.y, &fruits);
+            patches.push_back(image(roi));
+            fruit_masks.push_back(ids32(roi) == b.id);
+            rois.push_back(roi);
+          }
+          // One call per image: the CNN counts its blobs as a batch.
+          const std::vector<BlobCount> blob_counts = counter->CountMany(patches, fruit_masks);
+          for (size_t i = 0; i < blobs.size(); ++i) {
+            total += blob_counts[i].count;
+            AppendFruits(name, blobs[i].id, blob_counts[i], rois[i].x, rois[i].y, &fruits);
           }
         }
         counts.push_back({name, total});

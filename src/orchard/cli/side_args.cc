@@ -106,7 +106,8 @@ void SetUpFruit(const FruitArgs& a, const std::string& masks, FruitTools* tools,
     // Non-default settings change the blobs, so they are part of the cache key.
     if (a.min_blob_pixels != BlobOptions().min_pixels)
       in->detector_name += " min_blob_pixels=" + std::to_string(a.min_blob_pixels);
-    if (a.detector == "unet" && a.unet_threshold != 0.5) in->detector_name += " threshold=" + std::to_string(a.unet_threshold);
+    if (a.detector == "unet" && a.unet_threshold != DetectorChoice().unet_threshold)
+      in->detector_name += " threshold=" + std::to_string(a.unet_threshold);
   }
   if (a.counter != "blob" && !tools->counter) {
     CounterChoice choice;

@@ -7,6 +7,7 @@
 
 #include "orchard/count/counter.h"
 #include "orchard/detect/detector.h"
+#include "orchard/detect/detector_factory.h"
 #include "orchard/fruitmap/side.h"
 
 namespace CLI {
@@ -24,7 +25,7 @@ struct FruitArgs {
   // support removes specks (seed 11, U-Net, COLMAP: 163 apples of 237
   // visible with 100 px, 206 with 30, 226 with 15; docs/yield.md).
   int min_blob_pixels = 20;
-  double unet_threshold = 0.5;                     // apple probability of a U-Net pixel
+  double unet_threshold = DetectorChoice().unet_threshold;  // apple probability of a U-Net pixel
 };
 
 // The detector and counter objects a SideInputs points to.

@@ -3,11 +3,27 @@
 // counts in the three frames where the cluster shows the most fruit pixels).
 #pragma once
 
+#include <algorithm>
+#include <numeric>
 #include <vector>
 
 #include <Eigen/Core>
 
 namespace orchard {
+
+// Disjoint sets of 0..n-1; a set's representative is its smallest member.
+struct UnionFind {
+  std::vector<int> parent;
+  explicit UnionFind(int n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
+  int Find(int x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  }
+  void Join(int a, int b) {
+    a = Find(a), b = Find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+};
 
 // Component id (0..K-1, numbered by first point) of each point, where points
 // closer than `link_distance` are connected (single linkage, via a hash grid

@@ -4,7 +4,6 @@
 #include <cmath>
 #include <fstream>
 #include <map>
-#include <numeric>
 #include <set>
 #include <sstream>
 
@@ -75,27 +74,16 @@ std::vector<int> MergeSharedComponents(const std::vector<BlobVotes>& votes, int 
         for (const auto& other : by_component)
           if (other.first != a) shared[a][other.first] += points;
       }
-  std::vector<int> parent(k);
-  std::iota(parent.begin(), parent.end(), 0);
-  const auto find = [&](int x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
-  // Smallest first, so a chain of duplicates ends in the best-supported one.
-  std::vector<int> order(k);
-  std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return total[a] < total[b]; });
-  for (int a : order) {
+  // Each component's decision rests on the votes alone, so the order does not matter.
+  UnionFind groups(k);
+  for (int a = 0; a < k; ++a) {
     int best = -1, best_shared = 0;
     for (const auto& [b, points] : shared[a])
       if (total[b] > total[a] && points > best_shared) best = b, best_shared = points;
-    if (best >= 0 && best_shared >= fraction * total[a]) {
-      const int ra = find(a), rb = find(best);
-      if (ra != rb) parent[ra] = rb;
-    }
+    if (best >= 0 && best_shared >= fraction * total[a]) groups.Join(a, best);
   }
   std::vector<int> root(k);
-  for (int c = 0; c < k; ++c) root[c] = find(c);
+  for (int c = 0; c < k; ++c) root[c] = groups.Find(c);
   return root;
 }
 
@@ -179,23 +167,26 @@ ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std
   }
   // Each blob of each frame goes to the cluster with most points landing on
   // it; clusters below the minimum size do not vote.
+  const auto votes_here = [&](int cluster) {
+    return static_cast<int>(r.clusters[cluster].points.size()) >= o.min_points;
+  };
   for (int f = 0; f < n; ++f) {
     std::map<int, size_t> view_of;  // cluster -> index in its views
-    for (auto [blob, by_cluster] : votes[f]) {
-      for (auto it = by_cluster.begin(); it != by_cluster.end();)
-        it = static_cast<int>(r.clusters[it->first].points.size()) < o.min_points ? by_cluster.erase(it) : std::next(it);
-      if (by_cluster.empty()) continue;
-      const auto best = std::max_element(by_cluster.begin(), by_cluster.end(),
-                                         [](const auto& a, const auto& b) { return a.second < b.second; });
+    for (const auto& [blob, by_cluster] : votes[f]) {
+      int best = -1, best_points = 0;  // the first cluster with most points (map order)
       for (const auto& [cluster, points] : by_cluster)
-        (cluster == best->first ? r.clusters[cluster].votes_won : r.clusters[cluster].votes_lost) += points;
-      FruitCluster& c = r.clusters[best->first];
-      if (!view_of.count(best->first)) {
-        view_of[best->first] = c.views.size();
+        if (votes_here(cluster) && points > best_points) best = cluster, best_points = points;
+      if (best < 0) continue;
+      for (const auto& [cluster, points] : by_cluster)
+        if (votes_here(cluster))
+          (cluster == best ? r.clusters[cluster].votes_won : r.clusters[cluster].votes_lost) += points;
+      FruitCluster& c = r.clusters[best];
+      if (!view_of.count(best)) {
+        view_of[best] = c.views.size();
         c.views.push_back({f, 0, 0});
         c.view_blobs.emplace_back();
       }
-      const size_t v = view_of[best->first];
+      const size_t v = view_of[best];
       const Blob* b = frames[f].FindBlob(blob);
       c.views[v].pixels += b->pixels;
       c.views[v].count += frames[f].counts[blob - 1];

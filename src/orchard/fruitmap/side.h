@@ -115,7 +115,8 @@ using BlobVotes = std::map<int, std::map<int, int>>;
 // Joins the components (0..k-1) that are one apple triangulated twice: a
 // component with at least `fraction` of its votes on blobs that a component
 // with more votes also votes for joins the one it shares most with (chains
-// end in the best-supported one). Returns each component's representative.
+// join too). Returns each component's representative: the smallest
+// component of its group.
 std::vector<int> MergeSharedComponents(const std::vector<BlobVotes>& votes, int k, double fraction);
 
 // The 3D stage on frames with known (metric) poses and a ground plane.

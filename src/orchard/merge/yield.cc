@@ -108,12 +108,13 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
   if (o.face_check) {
     // Before the registration, which can align a side with its own mirror image.
     const FaceCheck faces = CheckOppositeFaces(y.front_side.frame_paths, y.back_side.frame_paths, o.faces);
+    const std::string front_frame = faces.front_frame.filename().string(),
+                      back_frame = faces.back_frame.filename().string();
     face_json = {{"best_inliers", faces.best_inliers}, {"max_inliers", o.faces.max_inliers},
-                 {"front_frame", faces.front_frame.filename().string()},
-                 {"back_frame", faces.back_frame.filename().string()}};
+                 {"front_frame", front_frame}, {"back_frame", back_frame}};
     if (faces.same_face)
-      Fail("the front and back videos show the same face of the row (frames ", faces.front_frame.filename().string(),
-           " and ", faces.back_frame.filename().string(), " share ", faces.best_inliers,
+      Fail("the front and back videos show the same face of the row (frames ", front_frame, " and ", back_frame,
+           " share ", faces.best_inliers,
            " matched features, opposite faces share few): film the back from the other side of the row");
   }
   SideCloud front_cloud = LoadSideCloud(front.out, "front");
