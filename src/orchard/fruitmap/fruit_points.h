@@ -21,6 +21,9 @@ struct FruitFrame {
   cv::Mat1i labels;          // blob id per pixel (0 = none), frame size
   std::vector<Blob> blobs;   // ids 1..N in order
   std::vector<int> counts;   // apples per blob (same order as blobs)
+  // Where each blob's apple centre is (same order; see FitAppleCentres); empty:
+  // the blob centroids.
+  std::vector<cv::Point2d> apple_centres;
   const Blob* FindBlob(int id) const { return id >= 1 && id <= static_cast<int>(blobs.size()) ? &blobs[id - 1] : nullptr; }
 };
 
@@ -57,8 +60,24 @@ struct FruitPointOptions {
   // Depth range in front of the cameras (scene units: metres once scaled).
   double min_depth = 0.3;
   double max_depth = 15;
+  // Triangulate the centres of circles fitted to the blobs' outlines instead
+  // of the blob centroids (FitAppleCentres): a partly hidden apple's visible
+  // pixels are off its centre, its outline is not. With exact masks and true
+  // poses this halved the clusters holding no apple (docs/side.md).
+  bool fit_circles = true;
   void Check() const;
 };
+
+// The centre of the apple a blob shows, in OpenCV pixel indices: a circle
+// fitted to the blob's outline (RANSAC on three outline pixels, then least
+// squares on the inliers), accepted when its inliers cover at least a quarter
+// of the circle, the blob lies inside it and the blob is clearly less than the
+// whole disc; otherwise the centroid (a whole apple, a blob of several apples,
+// or too little outline to fit). Deterministic for a given blob.
+cv::Point2d FitAppleCentre(const cv::Mat1i& labels, const Blob& blob);
+
+// Fills frame->apple_centres with FitAppleCentre for every blob.
+void FitAppleCentres(FruitFrame* frame);
 
 struct FruitPoint {
   Eigen::Vector3d xyz = Eigen::Vector3d::Zero();

@@ -174,6 +174,57 @@ TEST(BlobNearPoint, ASmallPieceOfAHiddenAppleSupportsItsCentre) {
   EXPECT_THROW(o.Check(), Error);
 }
 
+// A blob as the side stage makes it from a label image.
+Blob BlobOf(const cv::Mat1i& labels, int id) {
+  const cv::Mat1b mask = labels == id;
+  const cv::Moments m = cv::moments(mask, true);
+  const cv::Rect box = cv::boundingRect(mask);
+  Blob b;
+  b.id = id;
+  b.pixels = cv::countNonZero(mask);
+  b.centroid = {m.m10 / m.m00, m.m01 / m.m00};
+  b.box = Box{static_cast<double>(box.x), static_cast<double>(box.y), static_cast<double>(box.x + box.width),
+              static_cast<double>(box.y + box.height)};
+  return b;
+}
+
+TEST(FitAppleCentre, FindsTheCentreOfAPartlyHiddenAppleAndKeepsTheCentroidOtherwise) {
+  const cv::Point2d centre(50, 40);
+  const int radius = 12;
+  cv::Mat1i labels = cv::Mat1i::zeros(100, 120);
+  cv::circle(labels, cv::Point(50, 40), radius, 1, -1);
+  // A leaf covers the right half of the apple, another a notch of its lower edge.
+  labels(cv::Rect(50, 0, 70, 100)).setTo(0);
+  labels(cv::Rect(40, 48, 5, 10)).setTo(0);
+  const Blob hidden = BlobOf(labels, 1);
+  ASSERT_GT(cv::norm(hidden.centroid - centre), 4.0);
+  EXPECT_LT(cv::norm(FitAppleCentre(labels, hidden) - centre), 1.0);
+
+  // A whole apple: its centroid.
+  labels.setTo(0);
+  cv::circle(labels, cv::Point(50, 40), radius, 2, -1);
+  const Blob whole = BlobOf(labels, 2);
+  EXPECT_EQ(FitAppleCentre(labels, whole), whole.centroid);
+  // Two touching apples in one blob (a colour detector's): no circle holds
+  // it, so the centroid.
+  cv::circle(labels, cv::Point(72, 40), radius, 2, -1);
+  const Blob pair = BlobOf(labels, 2);
+  EXPECT_EQ(FitAppleCentre(labels, pair), pair.centroid);
+  // Too small to fit.
+  labels.setTo(0);
+  labels(cv::Rect(10, 10, 2, 2)).setTo(3);
+  const Blob speck = BlobOf(labels, 3);
+  EXPECT_EQ(FitAppleCentre(labels, speck), speck.centroid);
+
+  FruitFrame frame;
+  frame.labels = labels;
+  frame.blobs = {Blob{}, Blob{}, speck};
+  frame.blobs[0].id = 1, frame.blobs[1].id = 2;
+  FitAppleCentres(&frame);
+  ASSERT_EQ(frame.apple_centres.size(), 3u);
+  EXPECT_EQ(frame.apple_centres[2], speck.centroid);
+}
+
 TEST(CountFruitClusters, FindsAnAppleSeenOnlyThroughGapsInTheLeaves) {
   std::vector<CameraView> views;
   for (int i = 0; i < 24; ++i) views.push_back(ViewAt(-1.2 + 0.1 * i));
