@@ -72,6 +72,10 @@ void AddTrainNetworkCommands(CLI::App& app) {
                       "Probability that a drawn 1..6-apple sample is replaced by a composite of real single apples "
                       "pasted on real background of one training photo (0 = off)")
       ->capture_default_str();
+  counter->add_option("--balance-power", c->options.balance_power,
+                      "Class balancing: 1 = every class up-sampled to the largest (the study's), 0.5 = halfway "
+                      "(square root), 0 = the data's own class frequencies")
+      ->capture_default_str();
   counter->add_option("--background", c->patch_options.background_per_image, "Background patches per image")
       ->capture_default_str();
   AddTrainerOptions(counter, &c->options.trainer, &c->state);

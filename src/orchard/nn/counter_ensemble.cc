@@ -48,7 +48,8 @@ void WriteCounterEnsemble(const std::vector<fs::path>& models, const fs::path& o
     nlohmann::json member = {{"source", path.filename().string()},
                              {"architecture", header.at("architecture")},
                              {"input_size", header.at("input_size")}};
-    for (const char* key : {"data", "training", "train_class_counts", "copy_paste_probability", "ema_decay"}) {
+    for (const char* key :
+         {"data", "training", "train_class_counts", "copy_paste_probability", "ema_decay", "balance_power"}) {
       if (header.contains(key)) member[key] = header.at(key);
     }
     if (header.contains("train_class_counts")) {

@@ -1,6 +1,7 @@
 #include "orchard/nn/counter_training.h"
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <memory>
 #include <regex>
@@ -30,14 +31,7 @@ class CounterTask : public TrainingTask {
         val_images_(std::move(val_images)),
         val_labels_(std::move(val_labels)),
         save_best_(std::move(save_best)) {
-    // Balance classes by up-sampling: every class is repeated to the size of the largest.
-    std::map<int, std::vector<size_t>> by_class;
-    for (size_t i = 0; i < train_labels_.size(); ++i) by_class[train_labels_[i]].push_back(i);
-    size_t largest = 0;
-    for (auto& [label, members] : by_class) largest = std::max(largest, members.size());
-    for (auto& [label, members] : by_class) {
-      for (size_t k = 0; k < largest; ++k) balanced_.push_back(members[k % members.size()]);
-    }
+    balanced_ = BalancedIndices(train_labels_, options_.balance_power);
   }
   size_t NumTrain() const override { return balanced_.size(); }
   torch::Tensor TrainLoss(const std::vector<size_t>& indices, std::mt19937_64& rng) override {
@@ -83,6 +77,21 @@ class CounterTask : public TrainingTask {
 };
 
 }  // namespace
+
+std::vector<size_t> BalancedIndices(const std::vector<int>& labels, double power) {
+  std::map<int, std::vector<size_t>> by_class;
+  for (size_t i = 0; i < labels.size(); ++i) by_class[labels[i]].push_back(i);
+  size_t largest = 0;
+  for (const auto& [label, members] : by_class) largest = std::max(largest, members.size());
+  std::vector<size_t> balanced;
+  for (const auto& [label, members] : by_class) {
+    const double target = std::pow(static_cast<double>(largest), power) *
+                          std::pow(static_cast<double>(members.size()), 1 - power);
+    const size_t size = std::max(members.size(), static_cast<size_t>(std::lround(target)));
+    for (size_t k = 0; k < size; ++k) balanced.push_back(members[k % members.size()]);
+  }
+  return balanced;
+}
 
 std::string PatchPhotoId(const std::string& patch_name) {
   static const std::regex kPatchSuffix("_p[0-9]+$");
@@ -132,6 +141,7 @@ void CounterTrainingOptions::Check() const {
                        architecture.num_classes);
   ORCHARD_CHECK_OPTION(input_size >= 32 && input_size <= 512, "input size must be in [32, 512], got ", input_size);
   ORCHARD_CHECK_OPTION(learning_rate > 0, "learning rate must be positive, got ", learning_rate);
+  ORCHARD_CHECK_OPTION(balance_power >= 0 && balance_power <= 1, "balance power must be in [0, 1], got ", balance_power);
   ORCHARD_CHECK_OPTION(validation_fraction > 0 && validation_fraction < 1, "validation fraction must be in (0, 1), got ",
                        validation_fraction);
 }
@@ -184,6 +194,7 @@ CounterTrainingResult TrainCounter(const std::vector<LabelledPatch>& patches, co
                            {"validation_patches", result.validation_patches},
                            {"train_class_counts", result.train_class_counts},
                            {"copy_paste_probability", options.copy_paste.probability},
+                           {"balance_power", options.balance_power},
                            {"ema_decay", options.trainer.ema_decay}};
   BestCheckpoint best(model_path);
   auto save_best = [&] { best.Save(*net, header); };

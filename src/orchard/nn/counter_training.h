@@ -45,6 +45,12 @@ struct CounterTrainingOptions {
   // apples stay readable at 64 and training is ~12x cheaper.
   int input_size = 64;
   double learning_rate = 1e-3;  // Adam, betas 0.9 / 0.999 (the study's)
+  // Class balancing by up-sampling: class c (n_c patches) is drawn as if it
+  // had n_max^p * n_c^(1-p). 1 = every class as large as the largest (the
+  // study's); 0.5 or 0 raise per-patch accuracy on real photos, where most
+  // clusters hold one apple, but count multi-apple clusters too low
+  // (models/counter.md, "GPU recipe sweep").
+  double balance_power = 1.0;
   // Fraction of the training photos held out for early stopping.
   double validation_fraction = 0.2;
   uint64_t split_seed = 1;
@@ -62,6 +68,10 @@ struct CounterTrainingResult {
   int validation_patches = 0;
   std::vector<int> train_class_counts;  // before balancing
 };
+
+// Indices into `labels` with each class repeated to its balanced size
+// (CounterTrainingOptions::balance_power), classes in ascending order.
+std::vector<size_t> BalancedIndices(const std::vector<int>& labels, double power);
 
 // Trains on `patches` (split by photo into train / validation) and writes the
 // best model to `model_path` with a header describing architecture, input

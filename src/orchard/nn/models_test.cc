@@ -7,6 +7,7 @@
 
 #include "orchard/core/error.h"
 #include "orchard/nn/checkpoint.h"
+#include "orchard/nn/counter_training.h"
 #include "orchard/nn/losses.h"
 #include "orchard/nn/trainer.h"
 #include "orchard/core/test_util.h"
@@ -200,6 +201,26 @@ TEST(Checkpoint, ReloadGivesIdenticalOutputsAndRejectsMismatch) {
   EXPECT_THROW(LoadCheckpointWeights(*wider, dir / "m.pt"), Error);
   UNet unet(UNetOptions{4});
   EXPECT_THROW(LoadCheckpointWeights(*unet, dir / "m.pt"), Error);
+}
+
+TEST(CounterTraining, BalancedIndicesUpSampleByThePower) {
+  std::vector<int> labels(100, 1);
+  labels.insert(labels.end(), 4, 3);  // indices 100..103
+  auto count = [](const std::vector<size_t>& indices, size_t from, size_t to) {
+    return std::count_if(indices.begin(), indices.end(), [&](size_t i) { return i >= from && i < to; });
+  };
+  const std::vector<size_t> full = BalancedIndices(labels, 1.0);  // the study's: as large as the largest
+  EXPECT_EQ(count(full, 0, 100), 100);
+  EXPECT_EQ(count(full, 100, 104), 100);
+  for (size_t i = 100; i < 104; ++i) EXPECT_EQ(std::count(full.begin(), full.end(), i), 25);
+  const std::vector<size_t> half = BalancedIndices(labels, 0.5);  // sqrt(100 * 4) = 20
+  EXPECT_EQ(count(half, 0, 100), 100);
+  EXPECT_EQ(count(half, 100, 104), 20);
+  const std::vector<size_t> none = BalancedIndices(labels, 0.0);  // the data as it is
+  EXPECT_EQ(none.size(), 104u);
+  CounterTrainingOptions o;
+  o.balance_power = 1.5;
+  EXPECT_THROW(o.Check(), Error);
 }
 
 }  // namespace
