@@ -35,7 +35,7 @@ void AddSideOptions(CLI::App* cmd, SideOptions* options) {
       ->capture_default_str();
   cmd->add_option("--support-window", o.clusters.points.support_window, "Frames either side checked for support")
       ->capture_default_str();
-  cmd->add_flag("--fit-circles,!--no-fit-circles", o.clusters.points.fit_circles,
+  cmd->add_flag("--fit-circles,!--no-fit-circles", o.fit_apple_circles,
                "Triangulate circles fitted to the blobs' outlines (default) or the blob centroids");
   cmd->add_option("--centre-fraction", o.clusters.points.centre_fraction,
                   "Support only near blob centres (fraction of the blob radius, 0 = anywhere on the blob)")

@@ -77,25 +77,27 @@ cv::Point2d FitAppleCentre(const cv::Mat1i& labels, const Blob& blob) {
   int best_inliers = 0;
   cv::Point2d best_centre;
   double best_radius = 0;
+  // A visible piece is at most the whole disc, and a sliver's circle is too
+  // poorly fixed to be worth more than the centroid.
+  const auto plausible = [&](double r) { return r >= 0.9 * equivalent_radius && r <= 4 * equivalent_radius; };
+  const auto on_circle = [](const cv::Point2d& p, const cv::Point2d& c, double r) {
+    return std::abs(std::hypot(p.x - c.x, p.y - c.y) - r) < kInlierPx;
+  };
   for (int it = 0; it < kIterations; ++it) {
     cv::Point2d c;
     double r;
-    if (!CircleThrough(outline[pick(rng)], outline[pick(rng)], outline[pick(rng)], &c, &r)) continue;
-    // A visible piece is at most the whole disc, and a sliver's circle is
-    // too poorly fixed to be worth more than the centroid.
-    if (r < 0.9 * equivalent_radius || r > 4 * equivalent_radius) continue;
-    int inliers = 0;
-    for (const auto& p : outline) inliers += std::abs(std::hypot(p.x - c.x, p.y - c.y) - r) < kInlierPx;
+    if (!CircleThrough(outline[pick(rng)], outline[pick(rng)], outline[pick(rng)], &c, &r) || !plausible(r)) continue;
+    const int inliers =
+        static_cast<int>(std::count_if(outline.begin(), outline.end(), [&](const auto& p) { return on_circle(p, c, r); }));
     if (inliers > best_inliers) best_inliers = inliers, best_centre = c, best_radius = r;
   }
   if (best_inliers == 0) return blob.centroid;
   std::vector<cv::Point2d> inliers;
   for (const auto& p : outline)
-    if (std::abs(std::hypot(p.x - best_centre.x, p.y - best_centre.y) - best_radius) < kInlierPx) inliers.push_back(p);
+    if (on_circle(p, best_centre, best_radius)) inliers.push_back(p);
   cv::Point2d centre;
   double radius;
-  if (!FitCircle(inliers, &centre, &radius) || radius < 0.9 * equivalent_radius || radius > 4 * equivalent_radius)
-    centre = best_centre, radius = best_radius;
+  if (!FitCircle(inliers, &centre, &radius) || !plausible(radius)) centre = best_centre, radius = best_radius;
   if (inliers.size() < kMinCoverage * 2 * M_PI * radius) return blob.centroid;
   if (blob.pixels >= kWholeDisc * M_PI * radius * radius) return blob.centroid;
   int inside = 0;

@@ -21,8 +21,8 @@ struct FruitFrame {
   cv::Mat1i labels;          // blob id per pixel (0 = none), frame size
   std::vector<Blob> blobs;   // ids 1..N in order
   std::vector<int> counts;   // apples per blob (same order as blobs)
-  // Where each blob's apple centre is (same order; see FitAppleCentres); empty:
-  // the blob centroids.
+  // Where each blob's apple centre is (same order; see FitAppleCentres): the
+  // fruit points triangulate these, or the blob centroids when empty.
   std::vector<cv::Point2d> apple_centres;
   const Blob* FindBlob(int id) const { return id >= 1 && id <= static_cast<int>(blobs.size()) ? &blobs[id - 1] : nullptr; }
 };
@@ -60,11 +60,6 @@ struct FruitPointOptions {
   // Depth range in front of the cameras (scene units: metres once scaled).
   double min_depth = 0.3;
   double max_depth = 15;
-  // Triangulate the centres of circles fitted to the blobs' outlines instead
-  // of the blob centroids (FitAppleCentres): a partly hidden apple's visible
-  // pixels are off its centre, its outline is not. With exact masks and true
-  // poses this halved the clusters holding no apple (docs/side.md).
-  bool fit_circles = true;
   void Check() const;
 };
 

@@ -318,7 +318,7 @@ void CountBlobs(const cv::Mat& image, Counter* counter, FruitFrame* frame) {
     // holding one apple counted 2-6 in 22 of 71) where the box gives 222.
     const cv::Rect rect(static_cast<int>(b.box.x1), static_cast<int>(b.box.y1),
                         static_cast<int>(b.box.x2 - b.box.x1), static_cast<int>(b.box.y2 - b.box.y1));
-    patches.push_back(image(rect).clone());
+    patches.push_back(image(rect));
     fruit.push_back(frame->labels(rect) == b.id);
   }
   const std::vector<BlobCount> counts = counter->CountMany(patches, fruit);
@@ -517,7 +517,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   for (const auto& v : views) {
     image_paths.push_back(image_dir / v.name);
     frames.push_back(FrameFruit(in, image_paths.back(), in.out / "detections"));
-    if (o.clusters.points.fit_circles) FitAppleCentres(&frames.back());
+    if (o.fit_apple_circles) FitAppleCentres(&frames.back());
     if (frames.back().labels.cols != v.width || frames.back().labels.rows != v.height)
       Fail("frame ", v.name, " is ", frames.back().labels.cols, "x", frames.back().labels.rows, ", its camera ",
            v.width, "x", v.height);
