@@ -4,7 +4,7 @@
 // (held-out photos), cut to 1080 rows; boxes are shifted, and those cut by the
 // frame edge are clipped (dropped when less than half remains).
 //
-//   bench_gmm MODEL.json YOLO_DIR [FRAMES=10 [TEST_FRACTION SPLIT_SEED]]
+//   bench_gmm MODEL.json YOLO_DIR [FRAMES=10 [TEST_FRACTION SPLIT_SEED [both|fast [MIN_APPLE_POSTERIOR]]]]
 // With TEST_FRACTION, only the test photos of SplitByPhoto(TEST_FRACTION,
 // SPLIT_SEED) are used (the split of `--test-fraction F --split-seed S`).
 #include <chrono>
@@ -67,9 +67,10 @@ struct PathResult {
   DetectionMetrics metrics;
 };
 
-PathResult Run(const ColourModel& model, bool reference, const Mosaics& m) {
+PathResult Run(const ColourModel& model, bool reference, double min_apple_posterior, const Mosaics& m) {
   GmmDetectorOptions options;
   options.reference_slic = reference;
+  options.min_apple_posterior = min_apple_posterior;
   GmmDetector detector(model, options);
   detector.Detect(m.frames[0]);  // warm-up (thread pool, allocations)
   Predictions predictions;
@@ -96,7 +97,7 @@ double Mean(const std::vector<double>& v) {
 
 int main(int argc, char** argv) {
   if (argc < 3) {
-    std::fprintf(stderr, "usage: %s MODEL.json YOLO_DIR [FRAMES=10 [TEST_FRACTION SPLIT_SEED]]\n", argv[0]);
+    std::fprintf(stderr, "usage: %s MODEL.json YOLO_DIR [FRAMES=10 [TEST_FRACTION SPLIT_SEED [both|fast [MIN_APPLE_POSTERIOR]]]]\n", argv[0]);
     return 2;
   }
   try {
@@ -107,10 +108,11 @@ int main(int argc, char** argv) {
     const Mosaics m = MakeMosaics(crops, frames);
     std::printf("%d frames 1920x1080 (3x2 mosaics of %zu crops from %s), %zu boxes\n", frames,
                 crops.images.size(), argv[2], m.truth.NumObjects());
-    const PathResult fast = Run(model, false, m);
     // "fast" after the split arguments skips the reference path (for profiling).
     const bool fast_only = argc > 6 && std::string(argv[6]) == "fast";
-    const PathResult ref = fast_only ? fast : Run(model, true, m);
+    const double gate = argc > 7 ? std::atof(argv[7]) : GmmDetectorOptions().min_apple_posterior;
+    const PathResult fast = Run(model, false, gate, m);
+    const PathResult ref = fast_only ? fast : Run(model, true, gate, m);
     std::printf("%-28s %10s %8s %10s %10s %10s\n", "path", "frames/s", "F1@0.5", "P@0.5", "R@0.5", "meanF1");
     auto row = [](const char* name, const PathResult& r) {
       const int i50 = 49;  // iou[49] = 0.50

@@ -33,6 +33,10 @@ void AddDetectCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--reference-slic", args->detector.reference_slic,
                 "gmm: OpenCV's SLIC at full resolution (slow reference path)");
+  cmd->add_option("--min-apple-posterior", args->detector.gmm_min_apple_posterior,
+                  "gmm: a superpixel is apple when the KL rule says so and its apple posterior is at least this "
+                  "(0 = the KL rule alone)")
+      ->capture_default_str();
   cmd->add_option("--min-blob-pixels", args->detector.blobs.min_pixels, "Drop blobs smaller than this")
       ->capture_default_str();
   cmd->add_flag("--fruit-boxes", args->fruit_boxes,

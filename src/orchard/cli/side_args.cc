@@ -84,6 +84,9 @@ void AddFruitOptions(CLI::App* cmd, FruitArgs* a) {
       ->capture_default_str();
   cmd->add_option("--unet-threshold", a->unet_threshold, "A pixel is apple above this U-Net probability")
       ->capture_default_str();
+  cmd->add_option("--min-apple-posterior", a->gmm_min_apple_posterior,
+                  "gmm: a superpixel is apple when the KL rule says so and its apple posterior is at least this")
+      ->capture_default_str();
 }
 
 void SetUpFruit(const FruitArgs& a, const std::string& masks, FruitTools* tools, SideInputs* in) {
@@ -99,6 +102,7 @@ void SetUpFruit(const FruitArgs& a, const std::string& masks, FruitTools* tools,
       choice.threads = a.threads;
       choice.blobs.min_pixels = a.min_blob_pixels;
       choice.unet_threshold = a.unet_threshold;
+      choice.gmm_min_apple_posterior = a.gmm_min_apple_posterior;
       tools->detector = MakeDetector(choice);
     }
     in->detector = tools->detector.get();
@@ -110,6 +114,8 @@ void SetUpFruit(const FruitArgs& a, const std::string& masks, FruitTools* tools,
       in->detector_name += " min_blob_pixels=" + std::to_string(a.min_blob_pixels);
     if (a.detector == "unet" && a.unet_threshold != DetectorChoice().unet_threshold)
       in->detector_name += " threshold=" + std::to_string(a.unet_threshold);
+    if (a.detector == "gmm" && a.gmm_min_apple_posterior != FruitArgs().gmm_min_apple_posterior)
+      in->detector_name += " min_apple_posterior=" + std::to_string(a.gmm_min_apple_posterior);
   }
   if (a.counter != "blob" && !tools->counter) {
     CounterChoice choice;

@@ -26,6 +26,12 @@ struct FruitArgs {
   // visible with 100 px, 206 with 30, 226 with 15; docs/yield.md).
   int min_blob_pixels = 20;
   double unet_threshold = DetectorChoice().unet_threshold;  // apple probability of a U-Net pixel
+  // The colour detector's posterior gate is off here (the KL rule alone):
+  // the gate that lifts photo precision (docs/detection.md) costs the 3D
+  // stage the pieces of apples the red model half-recognises (demo row:
+  // 71 apples of 136 visible without it, 59 with 0.05, 48 with 0.2), and the
+  // multi-view support check removes specks instead.
+  double gmm_min_apple_posterior = 0;
 };
 
 // The detector and counter objects a SideInputs points to.

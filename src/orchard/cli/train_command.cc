@@ -40,6 +40,10 @@ void AddTrainCommand(CLI::App& app) {
   gmm->add_option("--min-clicks", args->options.min_clicks_per_class,
                   "Clicks: a class is apple when at least this many clicks fall in it")
       ->capture_default_str();
+  gmm->add_option("--min-apple-posterior", args->options.min_apple_posterior,
+                  "Annotations: the detector's superpixel decision the apple classes are chosen for "
+                  "(as `orchard detect --min-apple-posterior`)")
+      ->capture_default_str();
   gmm->add_option("--seed", args->options.seed, "EM initialisation seed")->capture_default_str();
   gmm->callback([args]() {
     ColourModel model;

@@ -28,6 +28,7 @@ std::unique_ptr<Detector> MakeDetector(const DetectorChoice& choice) {
   if (choice.method == "gmm") {
     GmmDetectorOptions options;
     options.reference_slic = choice.reference_slic;
+    options.min_apple_posterior = choice.gmm_min_apple_posterior;
     options.blobs = choice.blobs;
     options.num_threads = threads;
     return std::make_unique<GmmDetector>(ReadColourModel(model), options);

@@ -178,6 +178,8 @@ void ColourTrainingOptions::Check() const {
   ORCHARD_CHECK_OPTION(apple_pixel_fraction >= 0 && apple_pixel_fraction < 1,
                        "apple_pixel_fraction must be in [0, 1) (0 = chosen for the best F1), got ", apple_pixel_fraction);
   ORCHARD_CHECK_OPTION(min_clicks_per_class >= 1, "min_clicks_per_class must be >= 1, got ", min_clicks_per_class);
+  ORCHARD_CHECK_OPTION(min_apple_posterior >= 0 && min_apple_posterior < 1,
+                       "min_apple_posterior must be in [0, 1), got ", min_apple_posterior);
   segmentation.Check();
 }
 
@@ -337,7 +339,7 @@ ColourModel TrainColourModelFromAnnotations(const Dataset& dataset, const Colour
       const double threshold = 0.5 * (sorted[m - 1] + sorted[m]);
       if (!(sorted[m - 1] > sorted[m])) continue;
       mark(threshold);
-      const ColourClassifier classifier(model);
+      const ColourClassifier classifier(model, options.min_apple_posterior);
       double tp = 0, fp = 0, fn = 0;
       for (size_t i = 0; i < means.size(); i += step) {
         bool is_apple;
@@ -360,7 +362,8 @@ ColourModel TrainColourModelFromAnnotations(const Dataset& dataset, const Colour
   return model;
 }
 
-ColourClassifier::ColourClassifier(const ColourModel& model) {
+ColourClassifier::ColourClassifier(const ColourModel& model, double min_apple_posterior)
+    : min_apple_posterior_(min_apple_posterior) {
   model.Validate();
   double apple_total = 0, other_total = 0;
   for (int j = 0; j < model.mixture.NumComponents(); ++j)
@@ -410,8 +413,8 @@ void ColourClassifier::Classify(const Eigen::Vector3d& mean, const Eigen::Matrix
     sum += e;
     if (classes_[j].apple) apple += e;
   }
-  *is_apple = best_apple < best_other;
   *apple_posterior = static_cast<float>(apple / sum);
+  *is_apple = best_apple < best_other && *apple_posterior >= min_apple_posterior_;
 }
 
 int ColourClassifier::MostLikelyClass(const Eigen::Vector3d& mean) const {

@@ -64,6 +64,15 @@ void WriteColourModel(const ColourModel& model, const fs::path& path);
 // colour model, of another format version, or inconsistent.
 ColourModel ReadColourModel(const fs::path& path);
 
+// A superpixel the KL rule calls apple must also have at least this apple
+// posterior at its mean colour. The KL rule compares renormalised
+// sub-mixtures, which lifts the apple classes' prior (a few percent of the
+// colours) to that of all the foliage; the posterior keeps the true prior and
+// removes the shadowed leaves and bark the KL rule lets in. 0.2 was the best
+// detection F1 on the AppleBBCH training photos (docs/detection.md); 0 is
+// the KL rule alone.
+inline constexpr double kDefaultMinApplePosterior = 0.2;
+
 struct ColourTrainingOptions {
   // Number of colour classes (mixture components).
   int num_classes = 25;
@@ -80,6 +89,9 @@ struct ColourTrainingOptions {
   // (chosen with simulated clicks on training photos, docs/detection.md) keeps
   // a class that one click on a shaded fruit shares with foliage shadow out.
   int min_clicks_per_class = 2;
+  // Annotations: the superpixel decision the apple classes are chosen for
+  // (as the detector's GmmDetectorOptions::min_apple_posterior).
+  double min_apple_posterior = kDefaultMinApplePosterior;
   std::uint64_t seed = 0;
   SegmentationOptions segmentation;
 
@@ -110,11 +122,12 @@ ColourModel TrainColourModelFromAnnotations(const Dataset& dataset, const Colour
 // superpixel costs a few 3x3 products per class.
 class ColourClassifier {
  public:
-  explicit ColourClassifier(const ColourModel& model);
+  ColourClassifier(const ColourModel& model, double min_apple_posterior);
   // Apple when Goldberger's KL from the superpixel's Gaussian (mean, cov) to
   // the apple sub-mixture is smaller than to the non-apple sub-mixture (each
-  // sub-mixture's weights renormalised). `apple_posterior`: posterior of the
-  // apple classes at the superpixel's mean colour.
+  // sub-mixture's weights renormalised) and `apple_posterior`, the posterior
+  // of the apple classes at the superpixel's mean colour, is at least
+  // min_apple_posterior.
   void Classify(const Eigen::Vector3d& mean, const Eigen::Matrix3d& cov, bool* is_apple,
                 float* apple_posterior) const;
   // Most likely class of a colour.
@@ -130,6 +143,7 @@ class ColourClassifier {
     bool apple;
   };
   std::vector<ClassConstants> classes_;
+  double min_apple_posterior_;
 };
 
 }  // namespace orchard

@@ -10,11 +10,13 @@ namespace orchard {
 
 void GmmDetectorOptions::Check() const {
   blobs.Check();
+  ORCHARD_CHECK_OPTION(min_apple_posterior >= 0 && min_apple_posterior < 1,
+                       "min_apple_posterior must be in [0, 1), got ", min_apple_posterior);
   ORCHARD_CHECK_OPTION(num_threads >= 1, "num_threads must be >= 1, got ", num_threads);
 }
 
 GmmDetector::GmmDetector(const ColourModel& model, const GmmDetectorOptions& options)
-    : model_(model), options_(options), classifier_(model) {
+    : model_(model), options_(options), classifier_(model, options.min_apple_posterior) {
   options_.Check();
   segmentation_ = model.segmentation;
   segmentation_.superpixels.use_opencv = options.reference_slic;

@@ -12,6 +12,9 @@ struct GmmDetectorOptions {
   // Use OpenCV's SLIC at full resolution (the slow reference path) instead of
   // the fast superpixels on the downscaled frame.
   bool reference_slic = false;
+  // Superpixels need this apple posterior besides the KL rule (0 = KL alone);
+  // see kDefaultMinApplePosterior.
+  double min_apple_posterior = kDefaultMinApplePosterior;
   BlobOptions blobs;
   int num_threads = 2;
   void Check() const;

@@ -144,6 +144,40 @@ TEST_F(GmmDetectorTest, ModelFileRoundTripAndBadFiles) {
   EXPECT_THROW(ReadColourModel(dir_ / "missing.json"), Error);
 }
 
+// A rare, broad apple class and a common, narrow leaf class: between them the
+// KL rule (sub-mixtures renormalised, so each group has prior 1) says apple,
+// while the true prior (2% apple) puts the apple posterior near 0.02.
+TEST(ColourClassifierTest, ApplePosteriorGateRemovesWhatOnlyTheRenormalisedKlCallsApple) {
+  ColourModel model;
+  Gaussian apple, leaf;
+  apple.mean = Eigen::Vector3d(50, 40, 20);
+  apple.covariance = Eigen::Vector3d(100, 400, 100).asDiagonal();
+  leaf.mean = Eigen::Vector3d(50, -10, 20);
+  leaf.covariance = Eigen::Matrix3d::Identity() * 25;
+  model.mixture.components = {apple, leaf};
+  model.mixture.weights = {0.02, 0.98};
+  model.apple = {true, false};
+  const Eigen::Matrix3d small = Eigen::Matrix3d::Identity();
+  bool is_apple = false;
+  float posterior = -1;
+  // Between the classes: KL costs 9.14 (apple) < 9.39 (leaf); posterior 0.024.
+  ColourClassifier(model, 0.0).Classify(Eigen::Vector3d(50, 5, 20), small, &is_apple, &posterior);
+  EXPECT_TRUE(is_apple);
+  EXPECT_NEAR(posterior, 0.024, 0.002);
+  ColourClassifier(model, kDefaultMinApplePosterior).Classify(Eigen::Vector3d(50, 5, 20), small, &is_apple, &posterior);
+  EXPECT_FALSE(is_apple);
+  // On the apple class both rules agree.
+  ColourClassifier(model, kDefaultMinApplePosterior).Classify(Eigen::Vector3d(50, 40, 20), small, &is_apple, &posterior);
+  EXPECT_TRUE(is_apple);
+  EXPECT_GT(posterior, 0.9);
+  // On the leaf class neither does.
+  ColourClassifier(model, 0.0).Classify(Eigen::Vector3d(50, -10, 20), small, &is_apple, &posterior);
+  EXPECT_FALSE(is_apple);
+  GmmDetectorOptions options;
+  options.min_apple_posterior = 1;
+  EXPECT_THROW(options.Check(), Error);
+}
+
 TEST_F(GmmDetectorTest, BadInputGivesClearErrors) {
   // A click on an image that is not among the training images, or outside it.
   EXPECT_THROW(TrainColourModelFromClicks(images_, {{"nope.png", 5, 5}}, options_), Error);
