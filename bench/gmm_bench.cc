@@ -71,6 +71,7 @@ PathResult Run(const ColourModel& model, bool reference, double min_apple_poster
   GmmDetectorOptions options;
   options.reference_slic = reference;
   options.min_apple_posterior = min_apple_posterior;
+  options.refine_edges = std::getenv("ORCH_NOREFINE") == nullptr;
   GmmDetector detector(model, options);
   detector.Detect(m.frames[0]);  // warm-up (thread pool, allocations)
   Predictions predictions;

@@ -1,6 +1,7 @@
 #include "orchard/detect/gmm/gmm_detector.h"
 
 #include <cmath>
+#include <limits>
 
 #include <opencv2/imgproc.hpp>
 
@@ -23,6 +24,111 @@ GmmDetector::GmmDetector(const ColourModel& model, const GmmDetectorOptions& opt
   segmentation_.superpixels.num_threads = options.num_threads;
   segmentation_.Check();
 }
+
+namespace {
+
+// Fast path: redraws the blob edges at frame resolution. `d` holds the blobs
+// found at working resolution with their labels scaled up (nearest), so
+// their edges are quantised to 1 / scale frame pixels (2.7 px at the default
+// scale), which costs tight blobs their IoU with the fruit. Each frame pixel
+// under a working pixel at an edge of the blob mask (its 3x3 neighbourhood
+// holds both decisions) goes to the nearest, by SLIC distance at frame
+// resolution, of the superpixels of that neighbourhood, and takes its blob
+// (or background); boxes, pixel counts and centroids are then measured at
+// frame resolution. Scores stay the working-resolution means.
+void RefineEdgesAtFrameResolution(const cv::Mat& bgr, const SegmentedFrame& f, const cv::Mat1i& working_blobs,
+                                  double compactness, double region_size, FrameDetection* d) {
+  const cv::Mat1i& labels = f.superpixels.labels;
+  const int n = f.superpixels.num_labels, ww = labels.cols, wh = labels.rows;
+  // Superpixel centres (frame pixels), mean colours (8-bit LAB) and blobs.
+  std::vector<double> cx(n, 0.0), cy(n, 0.0), count(n, 0.0);
+  std::vector<int> blob_of(n, 0);
+  for (int y = 0; y < wh; ++y) {
+    const int* l = labels.ptr<int>(y);
+    const int* b = working_blobs.ptr<int>(y);
+    for (int x = 0; x < ww; ++x) {
+      cx[l[x]] += x, cy[l[x]] += y, count[l[x]] += 1;
+      if (b[x]) blob_of[l[x]] = b[x];
+    }
+  }
+  const double inv_x = static_cast<double>(bgr.cols) / ww, inv_y = static_cast<double>(bgr.rows) / wh;
+  std::vector<Eigen::Vector3d> colour8(n);
+  for (int k = 0; k < n; ++k) {
+    const double c = std::max(1.0, count[k]);
+    cx[k] = (cx[k] / c + 0.5) * inv_x - 0.5;
+    cy[k] = (cy[k] / c + 0.5) * inv_y - 0.5;
+    const Eigen::Vector3d& m = f.colours.mean[k];
+    colour8[k] = {m[0] * 2.55, m[1] + 128.0, m[2] + 128.0};
+  }
+  cv::Mat1b blob_mask, grown, shrunk, edge;
+  cv::compare(working_blobs, 0, blob_mask, cv::CMP_GT);
+  cv::dilate(blob_mask, grown, cv::Mat());
+  cv::erode(blob_mask, shrunk, cv::Mat());
+  cv::compare(grown, shrunk, edge, cv::CMP_NE);
+  // Frame pixels [first[w], first[w + 1]) lie under working column / row w
+  // (cv::resize's nearest-neighbour mapping, floor(frame * working / frame size)).
+  auto first_of = [](int frame, int working) {
+    std::vector<int> first(working + 1, frame);
+    for (int i = frame - 1; i >= 0; --i) first[std::min(working - 1, static_cast<int>(std::floor(i * static_cast<double>(working) / frame)))] = i;
+    for (int w = working - 1; w >= 0; --w) first[w] = std::min(first[w], first[w + 1]);
+    return first;
+  };
+  const std::vector<int> first_x = first_of(bgr.cols, ww), first_y = first_of(bgr.rows, wh);
+  std::vector<cv::Point> points;
+  std::vector<cv::Point> cells;  // working pixel of each point
+  for (int wy = 0; wy < wh; ++wy) {
+    const uchar* e = edge.ptr<uchar>(wy);
+    for (int wx = 0; wx < ww; ++wx) {
+      if (!e[wx]) continue;
+      for (int y = first_y[wy]; y < first_y[wy + 1]; ++y)
+        for (int x = first_x[wx]; x < first_x[wx + 1]; ++x) points.emplace_back(x, y), cells.emplace_back(wx, wy);
+    }
+  }
+  if (points.empty()) return;
+  cv::Mat3b colours(static_cast<int>(points.size()), 1);
+  for (size_t i = 0; i < points.size(); ++i) colours(static_cast<int>(i)) = bgr.at<cv::Vec3b>(points[i]);
+  cv::cvtColor(colours, colours, cv::COLOR_BGR2Lab);
+  const double spatial = (compactness / region_size) * (compactness / region_size);
+  for (size_t i = 0; i < points.size(); ++i) {
+    const cv::Point p = points[i], w = cells[i];
+    const cv::Vec3b c = colours(static_cast<int>(i));
+    int best = labels(w);
+    double best_d = std::numeric_limits<double>::infinity();
+    for (int y = std::max(0, w.y - 1); y <= std::min(wh - 1, w.y + 1); ++y)
+      for (int x = std::max(0, w.x - 1); x <= std::min(ww - 1, w.x + 1); ++x) {
+        const int k = labels(y, x);
+        const double dl = c[0] - colour8[k][0], da = c[1] - colour8[k][1], db = c[2] - colour8[k][2];
+        const double dx = p.x - cx[k], dy = p.y - cy[k];
+        const double dist = dl * dl + da * da + db * db + spatial * (dx * dx + dy * dy);
+        if (dist < best_d) best_d = dist, best = k;
+      }
+    d->labels(p) = blob_of[best];
+    d->mask(p) = blob_of[best] ? 255 : 0;
+  }
+  // Blob statistics at frame resolution, over each blob's box grown by one
+  // working pixel (the furthest an edge can move).
+  const int grow_x = static_cast<int>(std::ceil(inv_x)) + 1, grow_y = static_cast<int>(std::ceil(inv_y)) + 1;
+  for (Blob& b : d->blobs) {
+    const int x0 = std::max(0, static_cast<int>(b.box.x1) - grow_x), x1 = std::min(bgr.cols, static_cast<int>(std::ceil(b.box.x2)) + grow_x);
+    const int y0 = std::max(0, static_cast<int>(b.box.y1) - grow_y), y1 = std::min(bgr.rows, static_cast<int>(std::ceil(b.box.y2)) + grow_y);
+    int min_x = x1, min_y = y1, max_x = -1, max_y = -1, pixels = 0;
+    double sx = 0, sy = 0;
+    for (int y = y0; y < y1; ++y) {
+      const int* l = d->labels.ptr<int>(y);
+      for (int x = x0; x < x1; ++x) {
+        if (l[x] != b.id) continue;
+        ++pixels, sx += x, sy += y;
+        min_x = std::min(min_x, x), max_x = std::max(max_x, x), min_y = std::min(min_y, y), max_y = std::max(max_y, y);
+      }
+    }
+    if (pixels == 0) continue;  // every pixel moved to a neighbour: keep the working-resolution values
+    b.box = {static_cast<double>(min_x), static_cast<double>(min_y), max_x + 1.0, max_y + 1.0};
+    b.pixels = pixels;
+    b.centroid = {sx / pixels, sy / pixels};
+  }
+}
+
+}  // namespace
 
 FrameDetection GmmDetector::Detect(const cv::Mat& bgr) {
   const SegmentedFrame f = SegmentFrame(bgr, segmentation_);
@@ -61,8 +167,12 @@ FrameDetection GmmDetector::Detect(const cv::Mat& bgr) {
   }
   cv::Mat1i labels;
   cv::resize(d.labels, labels, bgr.size(), 0, 0, cv::INTER_NEAREST);
+  const cv::Mat1i working_blobs = d.labels;
   d.labels = labels;
   cv::compare(labels, 0, d.mask, cv::CMP_GT);
+  if (options_.refine_edges)
+    RefineEdgesAtFrameResolution(bgr, f, working_blobs, segmentation_.superpixels.compactness,
+                                 segmentation_.superpixels.region_size, &d);
   return d;
 }
 

@@ -15,6 +15,9 @@ struct GmmDetectorOptions {
   // Superpixels need this apple posterior besides the KL rule (0 = KL alone);
   // see kDefaultMinApplePosterior.
   double min_apple_posterior = kDefaultMinApplePosterior;
+  // Fast path: redraw the edges of the apple mask at frame resolution (see
+  // gmm_detector.cc) instead of scaling the working mask up.
+  bool refine_edges = true;
   BlobOptions blobs;
   int num_threads = 2;
   void Check() const;
