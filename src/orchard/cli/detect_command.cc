@@ -33,6 +33,9 @@ void AddDetectCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--reference-slic", args->detector.reference_slic,
                 "gmm: OpenCV's SLIC at full resolution (slow reference path)");
+  cmd->add_flag("!--working-scale-edges", args->detector.gmm_refine_edges,
+                "gmm fast path: keep the blob edges at working resolution (faster, coarser boxes) instead of "
+                "redrawing them at frame resolution");
   cmd->add_option("--min-apple-posterior", args->detector.gmm_min_apple_posterior,
                   "gmm: a superpixel is apple when the KL rule says so and its apple posterior is at least this "
                   "(0 = the KL rule alone)")

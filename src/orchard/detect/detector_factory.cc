@@ -29,6 +29,7 @@ std::unique_ptr<Detector> MakeDetector(const DetectorChoice& choice) {
     GmmDetectorOptions options;
     options.reference_slic = choice.reference_slic;
     options.min_apple_posterior = choice.gmm_min_apple_posterior;
+    options.refine_edges = choice.gmm_refine_edges;
     options.blobs = choice.blobs;
     options.num_threads = threads;
     return std::make_unique<GmmDetector>(ReadColourModel(model), options);

@@ -15,6 +15,7 @@ struct DetectorChoice {
   // Model file; empty = the shipped default (models/gmm_red.json, models/unet.pt).
   std::filesystem::path model;
   bool reference_slic = false;  // gmm: OpenCV's SLIC at full resolution (slow reference path)
+  bool gmm_refine_edges = true;  // gmm: GmmDetectorOptions::refine_edges (fast path)
   double gmm_min_apple_posterior = 0.2;  // gmm: GmmDetectorOptions::min_apple_posterior (kDefaultMinApplePosterior)
   BlobOptions blobs;
   int threads = 0;  // 0 = all cores
