@@ -7,6 +7,7 @@
 #include <string>
 
 #include "orchard/detect/detector.h"
+#include "orchard/detect/gmm/colour_model.h"
 
 namespace orchard {
 
@@ -16,7 +17,7 @@ struct DetectorChoice {
   std::filesystem::path model;
   bool reference_slic = false;  // gmm: OpenCV's SLIC at full resolution (slow reference path)
   bool gmm_refine_edges = true;  // gmm: GmmDetectorOptions::refine_edges (fast path)
-  double gmm_min_apple_posterior = 0.2;  // gmm: GmmDetectorOptions::min_apple_posterior (kDefaultMinApplePosterior)
+  double gmm_min_apple_posterior = kDefaultMinApplePosterior;  // gmm: GmmDetectorOptions::min_apple_posterior
   BlobOptions blobs;
   int threads = 0;  // 0 = all cores
   double unet_threshold = 0.5;

@@ -58,7 +58,7 @@ void RefineEdgesAtFrameResolution(const cv::Mat& bgr, const SegmentedFrame& f, c
     cx[k] = (cx[k] / c + 0.5) * inv_x - 0.5;
     cy[k] = (cy[k] / c + 0.5) * inv_y - 0.5;
     const Eigen::Vector3d& m = f.colours.mean[k];
-    colour8[k] = {m[0] * 2.55, m[1] + 128.0, m[2] + 128.0};
+    colour8[k] = Lab8BitFrom(m);
   }
   cv::Mat1b blob_mask, grown, shrunk, edge;
   cv::compare(working_blobs, 0, blob_mask, cv::CMP_GT);
@@ -66,32 +66,37 @@ void RefineEdgesAtFrameResolution(const cv::Mat& bgr, const SegmentedFrame& f, c
   cv::erode(blob_mask, shrunk, cv::Mat());
   cv::compare(grown, shrunk, edge, cv::CMP_NE);
   // Frame pixels [first[w], first[w + 1]) lie under working column / row w
-  // (cv::resize's nearest-neighbour mapping, floor(frame * working / frame size)).
+  // (cv::resize's nearest-neighbour mapping: frame pixel i under floor(i * working / frame)).
   auto first_of = [](int frame, int working) {
     std::vector<int> first(working + 1, frame);
-    for (int i = frame - 1; i >= 0; --i) first[std::min(working - 1, static_cast<int>(std::floor(i * static_cast<double>(working) / frame)))] = i;
+    for (int i = frame - 1; i >= 0; --i) {
+      const int w = std::min(working - 1, static_cast<int>(std::floor(i * static_cast<double>(working) / frame)));
+      first[w] = i;
+    }
     for (int w = working - 1; w >= 0; --w) first[w] = std::min(first[w], first[w + 1]);
     return first;
   };
   const std::vector<int> first_x = first_of(bgr.cols, ww), first_y = first_of(bgr.rows, wh);
-  std::vector<cv::Point> points;
-  std::vector<cv::Point> cells;  // working pixel of each point
-  for (int wy = 0; wy < wh; ++wy) {
-    const uchar* e = edge.ptr<uchar>(wy);
-    for (int wx = 0; wx < ww; ++wx) {
-      if (!e[wx]) continue;
-      for (int y = first_y[wy]; y < first_y[wy + 1]; ++y)
-        for (int x = first_x[wx]; x < first_x[wx + 1]; ++x) points.emplace_back(x, y), cells.emplace_back(wx, wy);
+  // Visits the frame pixels under the edge working pixels, always in the same order.
+  auto for_each_edge_pixel = [&](auto&& visit) {
+    for (int wy = 0; wy < wh; ++wy) {
+      const uchar* e = edge.ptr<uchar>(wy);
+      for (int wx = 0; wx < ww; ++wx) {
+        if (!e[wx]) continue;
+        for (int y = first_y[wy]; y < first_y[wy + 1]; ++y)
+          for (int x = first_x[wx]; x < first_x[wx + 1]; ++x) visit(cv::Point(x, y), cv::Point(wx, wy));
+      }
     }
-  }
-  if (points.empty()) return;
-  cv::Mat3b colours(static_cast<int>(points.size()), 1);
-  for (size_t i = 0; i < points.size(); ++i) colours(static_cast<int>(i)) = bgr.at<cv::Vec3b>(points[i]);
+  };
+  std::vector<cv::Vec3b> gathered;
+  for_each_edge_pixel([&](cv::Point p, cv::Point) { gathered.push_back(bgr.at<cv::Vec3b>(p)); });
+  if (gathered.empty()) return;
+  cv::Mat3b colours(static_cast<int>(gathered.size()), 1, gathered.data());
   cv::cvtColor(colours, colours, cv::COLOR_BGR2Lab);
   const double spatial = (compactness / region_size) * (compactness / region_size);
-  for (size_t i = 0; i < points.size(); ++i) {
-    const cv::Point p = points[i], w = cells[i];
-    const cv::Vec3b c = colours(static_cast<int>(i));
+  size_t i = 0;
+  for_each_edge_pixel([&](cv::Point p, cv::Point w) {
+    const cv::Vec3b c = gathered[i++];
     int best = labels(w);
     double best_d = std::numeric_limits<double>::infinity();
     for (int y = std::max(0, w.y - 1); y <= std::min(wh - 1, w.y + 1); ++y)
@@ -104,7 +109,7 @@ void RefineEdgesAtFrameResolution(const cv::Mat& bgr, const SegmentedFrame& f, c
       }
     d->labels(p) = blob_of[best];
     d->mask(p) = blob_of[best] ? 255 : 0;
-  }
+  });
   // Blob statistics at frame resolution, over each blob's box grown by one
   // working pixel (the furthest an edge can move).
   const int grow_x = static_cast<int>(std::ceil(inv_x)) + 1, grow_y = static_cast<int>(std::ceil(inv_y)) + 1;

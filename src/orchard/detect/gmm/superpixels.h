@@ -57,5 +57,9 @@ SuperpixelColours ComputeSuperpixelColours(const cv::Mat& lab8, const Superpixel
 inline Eigen::Vector3d LabFrom8Bit(double l8, double a8, double b8) {
   return {l8 * (100.0 / 255.0), a8 - 128.0, b8 - 128.0};
 }
+// CIELAB units -> OpenCV 8-bit LAB value (not rounded or clamped).
+inline Eigen::Vector3d Lab8BitFrom(const Eigen::Vector3d& lab) {
+  return {lab[0] * (255.0 / 100.0), lab[1] + 128.0, lab[2] + 128.0};
+}
 
 }  // namespace orchard
