@@ -34,10 +34,11 @@ namespace {
 // under a working pixel at an edge of the blob mask (its 3x3 neighbourhood
 // holds both decisions) goes to the nearest, by SLIC distance at frame
 // resolution, of the superpixels of that neighbourhood, and takes its blob
-// (or background); boxes, pixel counts and centroids are then measured at
-// frame resolution. Scores stay the working-resolution means.
+// (or background); the blobs are then regrouped and measured at frame
+// resolution (RegroupBlobsAtFrameResolution).
 void RefineEdgesAtFrameResolution(const cv::Mat& bgr, const SegmentedFrame& f, const cv::Mat1i& working_blobs,
-                                  double compactness, double region_size, FrameDetection* d) {
+                                  const cv::Mat1f& working_scores, double compactness, double region_size,
+                                  int min_pixels, FrameDetection* d) {
   const cv::Mat1i& labels = f.superpixels.labels;
   const int n = f.superpixels.num_labels, ww = labels.cols, wh = labels.rows;
   // Superpixel centres (frame pixels), mean colours (8-bit LAB) and blobs.
@@ -90,7 +91,7 @@ void RefineEdgesAtFrameResolution(const cv::Mat& bgr, const SegmentedFrame& f, c
   };
   std::vector<cv::Vec3b> gathered;
   for_each_edge_pixel([&](cv::Point p, cv::Point) { gathered.push_back(bgr.at<cv::Vec3b>(p)); });
-  if (gathered.empty()) return;
+  if (gathered.empty()) return;  // no blob
   cv::Mat3b colours(static_cast<int>(gathered.size()), 1, gathered.data());
   cv::cvtColor(colours, colours, cv::COLOR_BGR2Lab);
   const double spatial = (compactness / region_size) * (compactness / region_size);
@@ -110,27 +111,7 @@ void RefineEdgesAtFrameResolution(const cv::Mat& bgr, const SegmentedFrame& f, c
     d->labels(p) = blob_of[best];
     d->mask(p) = blob_of[best] ? 255 : 0;
   });
-  // Blob statistics at frame resolution, over each blob's box grown by one
-  // working pixel (the furthest an edge can move).
-  const int grow_x = static_cast<int>(std::ceil(inv_x)) + 1, grow_y = static_cast<int>(std::ceil(inv_y)) + 1;
-  for (Blob& b : d->blobs) {
-    const int x0 = std::max(0, static_cast<int>(b.box.x1) - grow_x), x1 = std::min(bgr.cols, static_cast<int>(std::ceil(b.box.x2)) + grow_x);
-    const int y0 = std::max(0, static_cast<int>(b.box.y1) - grow_y), y1 = std::min(bgr.rows, static_cast<int>(std::ceil(b.box.y2)) + grow_y);
-    int min_x = x1, min_y = y1, max_x = -1, max_y = -1, pixels = 0;
-    double sx = 0, sy = 0;
-    for (int y = y0; y < y1; ++y) {
-      const int* l = d->labels.ptr<int>(y);
-      for (int x = x0; x < x1; ++x) {
-        if (l[x] != b.id) continue;
-        ++pixels, sx += x, sy += y;
-        min_x = std::min(min_x, x), max_x = std::max(max_x, x), min_y = std::min(min_y, y), max_y = std::max(max_y, y);
-      }
-    }
-    if (pixels == 0) continue;  // every pixel moved to a neighbour: keep the working-resolution values
-    b.box = {static_cast<double>(min_x), static_cast<double>(min_y), max_x + 1.0, max_y + 1.0};
-    b.pixels = pixels;
-    b.centroid = {sx / pixels, sy / pixels};
-  }
+  RegroupBlobsAtFrameResolution(working_scores, min_pixels, d);
 }
 
 }  // namespace
@@ -176,9 +157,79 @@ FrameDetection GmmDetector::Detect(const cv::Mat& bgr) {
   d.labels = labels;
   cv::compare(labels, 0, d.mask, cv::CMP_GT);
   if (options_.refine_edges)
-    RefineEdgesAtFrameResolution(bgr, f, working_blobs, segmentation_.superpixels.compactness,
-                                 segmentation_.superpixels.region_size, &d);
+    RefineEdgesAtFrameResolution(bgr, f, working_blobs, scores, segmentation_.superpixels.compactness,
+                                 segmentation_.superpixels.region_size, options_.blobs.min_pixels, &d);
   return d;
+}
+
+void RegroupBlobsAtFrameResolution(const cv::Mat1f& working_scores, int min_pixels, FrameDetection* d) {
+  const int width = d->labels.cols, height = d->labels.rows;
+  const int ww = working_scores.cols, wh = working_scores.rows;
+  if (ww < 1 || wh < 1 || ww > width || wh > height) Fail("working scores must not be larger than the frame");
+  if (d->mask.size() != d->labels.size()) Fail("blob mask and labels differ in size");
+  // Working column / row under each frame column / row (cv::resize's nearest
+  // mapping, as the labels were scaled up).
+  auto working_of = [](int frame, int working) {
+    std::vector<int> w(frame);
+    for (int i = 0; i < frame; ++i) w[i] = std::min(working - 1, static_cast<int>(std::floor(i * static_cast<double>(working) / frame)));
+    return w;
+  };
+  const std::vector<int> wx_of = working_of(width, ww), wy_of = working_of(height, wh);
+  const int grow_x = (width + ww - 1) / ww + 1, grow_y = (height + wh - 1) / wh + 1;
+  std::vector<Blob> blobs;
+  std::vector<cv::Rect> rois;
+  // Pass 1: new ids are written negated, so that a renumbered blob cannot be
+  // mistaken for a later one with that id.
+  for (const Blob& old : d->blobs) {
+    const int x0 = std::max(0, static_cast<int>(old.box.x1) - grow_x);
+    const int x1 = std::min(width, static_cast<int>(std::ceil(old.box.x2)) + grow_x);
+    const int y0 = std::max(0, static_cast<int>(old.box.y1) - grow_y);
+    const int y1 = std::min(height, static_cast<int>(std::ceil(old.box.y2)) + grow_y);
+    const cv::Rect roi(x0, y0, x1 - x0, y1 - y0);
+    cv::Mat1b own;
+    cv::compare(d->labels(roi), old.id, own, cv::CMP_EQ);
+    cv::Mat1i pieces;
+    cv::Mat stats, centroids;
+    const int n = cv::connectedComponentsWithStats(own, pieces, stats, centroids, 8, CV_32S);
+    std::vector<int> id_of(n, 0);
+    std::vector<double> score_sum(n, 0.0);
+    for (int c = 1; c < n; ++c) {
+      if (stats.at<int>(c, cv::CC_STAT_AREA) < min_pixels) continue;
+      Blob b;
+      b.id = static_cast<int>(blobs.size()) + 1;
+      b.box = Box::FromXYWH(x0 + stats.at<int>(c, cv::CC_STAT_LEFT), y0 + stats.at<int>(c, cv::CC_STAT_TOP),
+                            stats.at<int>(c, cv::CC_STAT_WIDTH), stats.at<int>(c, cv::CC_STAT_HEIGHT));
+      b.pixels = stats.at<int>(c, cv::CC_STAT_AREA);
+      b.centroid = {x0 + centroids.at<double>(c, 0), y0 + centroids.at<double>(c, 1)};
+      id_of[c] = b.id;
+      blobs.push_back(b);
+    }
+    rois.push_back(roi);
+    for (int y = 0; y < roi.height; ++y) {
+      const int* p = pieces.ptr<int>(y);
+      int* l = d->labels.ptr<int>(y0 + y);
+      uchar* m = d->mask.ptr<uchar>(y0 + y);
+      const float* s = working_scores.ptr<float>(wy_of[y0 + y]);
+      for (int x = 0; x < roi.width; ++x) {
+        if (!p[x]) continue;
+        const int id = id_of[p[x]];
+        l[x0 + x] = -id;
+        if (!id) m[x0 + x] = 0;
+        score_sum[p[x]] += s[wx_of[x0 + x]];
+      }
+    }
+    for (int c = 1; c < n; ++c)
+      if (id_of[c]) blobs[id_of[c] - 1].score = score_sum[c] / blobs[id_of[c] - 1].pixels;
+  }
+  // Pass 2: ids back to positive (each blob's pixels lie inside its roi).
+  for (const cv::Rect& roi : rois) {
+    for (int y = roi.y; y < roi.y + roi.height; ++y) {
+      int* l = d->labels.ptr<int>(y);
+      for (int x = roi.x; x < roi.x + roi.width; ++x)
+        if (l[x] < 0) l[x] = -l[x];
+    }
+  }
+  d->blobs = std::move(blobs);
 }
 
 }  // namespace orchard

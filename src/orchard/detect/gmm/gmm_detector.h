@@ -26,9 +26,10 @@ struct GmmDetectorOptions {
 class GmmDetector : public Detector {
  public:
   GmmDetector(const ColourModel& model, const GmmDetectorOptions& options);
-  // Blob boxes, centroids and pixel counts are in frame pixels; on the fast
-  // path they are measured at working resolution and scaled up (pixel counts
-  // to within the downscaling's rounding).
+  // Blob boxes, centroids and pixel counts are in frame pixels. On the fast
+  // path they are measured at frame resolution after the edges are redrawn
+  // (refine_edges), else at working resolution and scaled up (pixel counts to
+  // within the downscaling's rounding).
   FrameDetection Detect(const cv::Mat& bgr) override;
 
  private:
@@ -37,5 +38,17 @@ class GmmDetector : public Detector {
   SegmentationOptions segmentation_;
   ColourClassifier classifier_;
 };
+
+// The fast path's last step, after the blob edges were redrawn at frame
+// resolution: a blob may then fall apart (two apples joined at working
+// resolution by a gap narrower than a working pixel) or shed slivers (edge
+// pixels matching an apple superpixel but not touching the blob; they used to
+// stretch its box). Each blob's pixels are regrouped into 8-connected pieces
+// within its box grown by one working pixel (the furthest an edge moves):
+// pieces under `min_pixels` are dropped from labels and mask, the others
+// become blobs measured at frame resolution (box, pixels, centroid; score =
+// mean of `working_scores`, the working-resolution posterior map, under their
+// pixels). Ids are renumbered 1..N keeping the old order.
+void RegroupBlobsAtFrameResolution(const cv::Mat1f& working_scores, int min_pixels, FrameDetection* detection);
 
 }  // namespace orchard

@@ -123,6 +123,46 @@ TEST_F(GmmDetectorTest, EdgesRedrawnAtFrameResolutionFitTheDiscsBetter) {
   EXPECT_LT(area_error[1], area_error[0]);
 }
 
+// Blob 1 fell apart at frame resolution into two pieces and shed a sliver;
+// blob 2 is whole. Working resolution is half the frame's.
+TEST(RegroupBlobsAtFrameResolution, PiecesBecomeBlobsSliversAreDropped) {
+  FrameDetection d;
+  d.labels = cv::Mat1i(40, 60, 0);
+  d.labels(cv::Rect(4, 4, 6, 5)).setTo(1);    // 30 px
+  d.labels(cv::Rect(12, 4, 4, 5)).setTo(1);   // 20 px, 2 px away: a piece of its own
+  d.labels(cv::Rect(4, 11, 2, 1)).setTo(1);   // 2 px sliver
+  d.labels(cv::Rect(40, 20, 10, 10)).setTo(2);  // 100 px
+  cv::compare(d.labels, 0, d.mask, cv::CMP_GT);
+  Blob b1, b2;
+  b1.id = 1, b1.box = {4, 4, 16, 12}, b1.pixels = 52;
+  b2.id = 2, b2.box = {40, 20, 50, 30}, b2.pixels = 100;
+  d.blobs = {b1, b2};
+  cv::Mat1f scores(20, 30, 0.8f);
+  scores.colRange(7, 30).setTo(0.4f);  // frame columns 14.. score 0.4
+  RegroupBlobsAtFrameResolution(scores, /*min_pixels=*/5, &d);
+  ASSERT_EQ(d.blobs.size(), 3u);
+  const Box expected[3] = {{4, 4, 10, 9}, {12, 4, 16, 9}, {40, 20, 50, 30}};
+  const int pixels[3] = {30, 20, 100};
+  const double score[3] = {0.8, (2 * 5 * 0.8 + 2 * 5 * 0.4) / 20, 0.4};
+  for (int i = 0; i < 3; ++i) {
+    const Blob& b = d.blobs[i];
+    EXPECT_EQ(b.id, i + 1);
+    EXPECT_EQ(b.box.x1, expected[i].x1);
+    EXPECT_EQ(b.box.y1, expected[i].y1);
+    EXPECT_EQ(b.box.x2, expected[i].x2);
+    EXPECT_EQ(b.box.y2, expected[i].y2);
+    EXPECT_EQ(b.pixels, pixels[i]);
+    EXPECT_EQ(cv::countNonZero(d.labels == b.id), pixels[i]);
+    EXPECT_NEAR(b.centroid.x, (expected[i].x1 + expected[i].x2 - 1) / 2, 1e-9);
+    EXPECT_NEAR(b.centroid.y, (expected[i].y1 + expected[i].y2 - 1) / 2, 1e-9);
+    EXPECT_NEAR(b.score, score[i], 1e-6);
+  }
+  EXPECT_EQ(d.labels(11, 4), 0);  // the sliver is gone from labels and mask
+  EXPECT_EQ(d.mask(11, 4), 0);
+  EXPECT_EQ(cv::countNonZero(d.mask), 150);
+  EXPECT_EQ(cv::countNonZero(d.labels < 0), 0);
+}
+
 TEST_F(GmmDetectorTest, ClickAgreementMarksOnlyClassesSeveralClicksShare) {
   options_.min_clicks_per_class = 2;
   // One click: no class has two votes, a clear error.
