@@ -8,6 +8,7 @@
 #include "orchard/core/frame_source.h"
 #include "orchard/count/gmm_counter.h"
 #include "orchard/detect/detector_factory.h"
+#include "orchard/detect/parallel_detection.h"
 
 namespace orchard {
 
@@ -50,23 +51,25 @@ void AddDetectCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--threads", args->detector.threads, "Threads (0 = all cores)")->capture_default_str();
   cmd->callback([args]() {
-    const std::unique_ptr<Detector> detector = MakeDetector(args->detector);
+    // Frames run in parallel (one colour detector per core); results arrive in order.
+    const std::vector<std::unique_ptr<Detector>> detectors = MakeFrameDetectors(args->detector);
     FrameSource source(args->in, args->frames);
     const fs::path out = args->out;
     std::vector<NamedDetection> results;
     GmmCounter splitter{GmmCounterOptions()};
     Predictions fruits;
-    Frame frame;
-    while (source.Next(&frame)) {
-      NamedDetection r{frame.name, detector->Detect(frame.image)};
-      if (args->fruit_boxes) fruits[frame.name] = FruitBoxes(frame.image, r.detection, splitter);
-      WriteImageAtomic(out / "masks" / (fs::path(frame.name).stem().string() + ".png"), InstanceMask(r.detection));
-      // Keep only the blob list in memory, not the masks.
-      r.detection.mask.release();
-      r.detection.labels.release();
-      results.push_back(std::move(r));
-      if (results.size() % 50 == 0) spdlog::info("{} frames", results.size());
-    }
+    DetectFrames(
+        detectors, [&](Frame* frame) { return source.Next(frame); },
+        [&](Frame& frame, FrameDetection& detection) {
+          NamedDetection r{frame.name, std::move(detection)};
+          if (args->fruit_boxes) fruits[frame.name] = FruitBoxes(frame.image, r.detection, splitter);
+          WriteImageAtomic(out / "masks" / (fs::path(frame.name).stem().string() + ".png"), InstanceMask(r.detection));
+          // Keep only the blob list in memory, not the masks.
+          r.detection.mask.release();
+          r.detection.labels.release();
+          results.push_back(std::move(r));
+          if (results.size() % 50 == 0) spdlog::info("{} frames", results.size());
+        });
     if (args->fruit_boxes) WriteCodaLabDetections(fruits, out / "detections.csv");
     else WriteDetectionsCsv(results, out / "detections.csv");
     WriteBlobsCsv(results, out / "blobs.csv");

@@ -21,25 +21,52 @@ std::filesystem::path DefaultDetectorModel(const std::string& method) {
   Fail("unknown detector '", method, "' (available: gmm, unet)");
 }
 
+namespace {
+
+int Threads(const DetectorChoice& choice) {
+  return choice.threads > 0 ? choice.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+}
+
+std::filesystem::path ModelFile(const DetectorChoice& choice) {
+  return choice.model.empty() ? DefaultDetectorModel(choice.method) : choice.model;
+}
+
+GmmDetectorOptions GmmOptions(const DetectorChoice& choice, int threads) {
+  GmmDetectorOptions options;
+  options.reference_slic = choice.reference_slic;
+  options.min_apple_posterior = choice.gmm_min_apple_posterior;
+  options.refine_edges = choice.gmm_refine_edges;
+  options.blobs = choice.blobs;
+  options.num_threads = threads;
+  return options;
+}
+
+}  // namespace
+
 std::unique_ptr<Detector> MakeDetector(const DetectorChoice& choice) {
   choice.Check();
-  const std::filesystem::path model = choice.model.empty() ? DefaultDetectorModel(choice.method) : choice.model;
-  const int threads = choice.threads > 0 ? choice.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  if (choice.method == "gmm") {
-    GmmDetectorOptions options;
-    options.reference_slic = choice.reference_slic;
-    options.min_apple_posterior = choice.gmm_min_apple_posterior;
-    options.refine_edges = choice.gmm_refine_edges;
-    options.blobs = choice.blobs;
-    options.num_threads = threads;
-    return std::make_unique<GmmDetector>(ReadColourModel(model), options);
-  }
+  const std::filesystem::path model = ModelFile(choice);
+  const int threads = Threads(choice);
+  if (choice.method == "gmm") return std::make_unique<GmmDetector>(ReadColourModel(model), GmmOptions(choice, threads));
   UNetDetectorOptions options;
   options.blobs = choice.blobs;
   options.threads = threads;
   options.threshold = choice.unet_threshold;
   options.whole_frame = choice.unet_whole_frame;
   return std::make_unique<UNetDetector>(model, options);
+}
+
+std::vector<std::unique_ptr<Detector>> MakeFrameDetectors(const DetectorChoice& choice) {
+  std::vector<std::unique_ptr<Detector>> detectors;
+  if (choice.method != "gmm") {
+    detectors.push_back(MakeDetector(choice));
+    return detectors;
+  }
+  choice.Check();
+  const ColourModel model = ReadColourModel(ModelFile(choice));
+  for (int i = 0; i < Threads(choice); ++i)
+    detectors.push_back(std::make_unique<GmmDetector>(model, GmmOptions(choice, 1)));
+  return detectors;
 }
 
 }  // namespace orchard

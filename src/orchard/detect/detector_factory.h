@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "orchard/detect/detector.h"
 #include "orchard/detect/gmm/colour_model.h"
@@ -31,5 +32,10 @@ std::filesystem::path DefaultDetectorModel(const std::string& method);
 
 // Throws orchard::Error for an unknown method or a model that cannot be loaded.
 std::unique_ptr<Detector> MakeDetector(const DetectorChoice& choice);
+
+// Detectors for DetectFrames (parallel_detection.h): the colour detector as one
+// single-threaded detector per thread, so frames run in parallel; the U-Net,
+// whose network already uses every thread, as one detector.
+std::vector<std::unique_ptr<Detector>> MakeFrameDetectors(const DetectorChoice& choice);
 
 }  // namespace orchard
