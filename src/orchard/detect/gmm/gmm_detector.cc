@@ -1,5 +1,6 @@
 #include "orchard/detect/gmm/gmm_detector.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -79,35 +80,49 @@ void RefineEdgesAtFrameResolution(const cv::Mat& bgr, const SegmentedFrame& f, c
   };
   const std::vector<int> first_x = first_of(bgr.cols, ww), first_y = first_of(bgr.rows, wh);
   // Visits the frame pixels under the edge working pixels, always in the same order.
-  auto for_each_edge_pixel = [&](auto&& visit) {
+  // Visits the frame pixels under the edge working pixels, always in the same
+  // order; enter_cell(working pixel) is called before the pixels under it.
+  auto for_each_edge_pixel = [&](auto&& enter_cell, auto&& visit) {
     for (int wy = 0; wy < wh; ++wy) {
       const uchar* e = edge.ptr<uchar>(wy);
       for (int wx = 0; wx < ww; ++wx) {
         if (!e[wx]) continue;
+        enter_cell(cv::Point(wx, wy));
         for (int y = first_y[wy]; y < first_y[wy + 1]; ++y)
-          for (int x = first_x[wx]; x < first_x[wx + 1]; ++x) visit(cv::Point(x, y), cv::Point(wx, wy));
+          for (int x = first_x[wx]; x < first_x[wx + 1]; ++x) visit(cv::Point(x, y));
       }
     }
   };
   std::vector<cv::Vec3b> gathered;
-  for_each_edge_pixel([&](cv::Point p, cv::Point) { gathered.push_back(bgr.at<cv::Vec3b>(p)); });
+  for_each_edge_pixel([](cv::Point) {}, [&](cv::Point p) { gathered.push_back(bgr.at<cv::Vec3b>(p)); });
   if (gathered.empty()) return;  // no blob
   cv::Mat3b colours(static_cast<int>(gathered.size()), 1, gathered.data());
   cv::cvtColor(colours, colours, cv::COLOR_BGR2Lab);
   const double spatial = (compactness / region_size) * (compactness / region_size);
-  size_t i = 0;
-  for_each_edge_pixel([&](cv::Point p, cv::Point w) {
-    const cv::Vec3b c = gathered[i++];
-    int best = labels(w);
-    double best_d = std::numeric_limits<double>::infinity();
+  // The distinct superpixels of the cell's 3x3 neighbourhood (usually 2-4 of
+  // the 9), in scan order so that ties go the same way.
+  int candidates[9], num_candidates = 0;
+  auto enter_cell = [&](cv::Point w) {
+    num_candidates = 0;
     for (int y = std::max(0, w.y - 1); y <= std::min(wh - 1, w.y + 1); ++y)
       for (int x = std::max(0, w.x - 1); x <= std::min(ww - 1, w.x + 1); ++x) {
         const int k = labels(y, x);
-        const double dl = c[0] - colour8[k][0], da = c[1] - colour8[k][1], db = c[2] - colour8[k][2];
-        const double dx = p.x - cx[k], dy = p.y - cy[k];
-        const double dist = dl * dl + da * da + db * db + spatial * (dx * dx + dy * dy);
-        if (dist < best_d) best_d = dist, best = k;
+        if (std::find(candidates, candidates + num_candidates, k) == candidates + num_candidates)
+          candidates[num_candidates++] = k;
       }
+  };
+  size_t i = 0;
+  for_each_edge_pixel(enter_cell, [&](cv::Point p) {
+    const cv::Vec3b c = gathered[i++];
+    int best = candidates[0];
+    double best_d = std::numeric_limits<double>::infinity();
+    for (int j = 0; j < num_candidates; ++j) {
+      const int k = candidates[j];
+      const double dl = c[0] - colour8[k][0], da = c[1] - colour8[k][1], db = c[2] - colour8[k][2];
+      const double dx = p.x - cx[k], dy = p.y - cy[k];
+      const double dist = dl * dl + da * da + db * db + spatial * (dx * dx + dy * dy);
+      if (dist < best_d) best_d = dist, best = k;
+    }
     d->labels(p) = blob_of[best];
     d->mask(p) = blob_of[best] ? 255 : 0;
   });
