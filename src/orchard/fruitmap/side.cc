@@ -113,12 +113,18 @@ std::string EvidenceStatus(const FruitCluster& c, const ClusterOptions& o) {
 ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std::vector<FruitFrame>& frames,
                                  const Plane& ground, const ClusterOptions& o) {
   o.Check();
+  return CountFruitClusters(views, frames, ground, o, TriangulateFruitPoints(views, frames, o.points));
+}
+
+ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std::vector<FruitFrame>& frames,
+                                 const Plane& ground, const ClusterOptions& o, std::vector<FruitPoint> points) {
+  o.Check();
   if (views.size() != frames.size()) Fail("clusters: ", views.size(), " views but ", frames.size(), " frames");
   if (views.size() < 2) Fail("clusters: need at least two frames, got ", views.size());
   ClusterResult r;
   for (const auto& f : frames)
     for (int c : f.counts) r.single_frame_sum += c;
-  r.points = TriangulateFruitPoints(views, frames, o.points);
+  r.points = std::move(points);
   std::vector<Eigen::Vector3d> xyz;
   for (const auto& p : r.points) xyz.push_back(p.xyz);
   int k = 0;
@@ -269,6 +275,7 @@ void SideOptions::Check() const {
   clusters.Check();
   ORCHARD_CHECK_OPTION(camera_height > 0, "camera height must be positive, got ", camera_height);
   ORCHARD_CHECK_OPTION(draw_every >= 0, "draw every must be >= 0, got ", draw_every);
+  if (one_side_clusters) one_side_clusters->Check();
 }
 
 namespace {
@@ -525,6 +532,8 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   }
   s.fruit_s = stopwatch.Lap();
   const ClusterResult r = CountFruitClusters(views, frames, ground, o.clusters);
+  s.one_side_count = o.one_side_clusters ? CountFruitClusters(views, frames, ground, *o.one_side_clusters, r.points).count
+                                         : r.count;
   s.clusters_s = stopwatch.Lap();
   WriteOutputs(in.out, image_paths, frames, r, o);
   s.outputs_s = stopwatch.Lap();
@@ -547,6 +556,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   if (s.clusters_kept == 0) warnings.push_back("no fruit cluster kept: the count is not meaningful");
   const Json j = {
       {"count", s.count},
+      {"one_side_count", s.one_side_count},
       {"single_frame_sum", s.single_frame_sum},
       {"frames", {{"input", num_frames}, {"registered", s.frames_registered}, {"used", s.frames_used},
                   {"unregistered", unregistered}}},

@@ -123,6 +123,10 @@ std::vector<int> MergeSharedComponents(const std::vector<BlobVotes>& votes, int 
 // The 3D stage on frames with known (metric) poses and a ground plane.
 ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std::vector<FruitFrame>& frames,
                                  const Plane& ground, const ClusterOptions& options);
+// The same on fruit points already triangulated (options.points is not used),
+// to count one set of points under other cluster rules.
+ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std::vector<FruitFrame>& frames,
+                                 const Plane& ground, const ClusterOptions& options, std::vector<FruitPoint> points);
 
 // A ground plane given as "nx,ny,nz,d" or as a json file with
 // {"ground_plane": {"normal": [..], "d": ..}} (the generator's scene.json).
@@ -146,6 +150,11 @@ struct SideOptions {
   bool rescale_given_poses = false;
   // Annotated copies of every n-th frame (0 = none).
   int draw_every = 5;
+  // Also count the side under these cluster rules, on the same fruit points
+  // (their point options are not used): `orchard yield` keeps stricter
+  // clusters for the merge and reports each side's own count under `orchard
+  // side`'s rules (SideSummary::one_side_count).
+  std::optional<ClusterOptions> one_side_clusters;
   void Check() const;
 };
 
@@ -165,6 +174,8 @@ struct SideInputs {
 
 struct SideSummary {
   int count = 0;
+  // The count under SideOptions::one_side_clusters (= count when not set).
+  int one_side_count = 0;
   int single_frame_sum = 0;
   int frames_used = 0, frames_registered = 0;
   int clusters_kept = 0, clusters_removed = 0;

@@ -32,7 +32,8 @@ void YieldOptions::Check() const {
 namespace {
 
 Json SideJson(const SideSummary& s, const SideCloud& cloud) {
-  return {{"count", s.count},
+  return {{"count", s.one_side_count},
+          {"merge_clusters_count", s.count},
           {"single_frame_sum", s.single_frame_sum},
           {"frames_used", s.frames_used},
           {"clusters_kept", s.clusters_kept},
@@ -90,11 +91,17 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
   // 1-2: each side in 3D (resumes from its caches in OUT/<side>/).
   SideInputs front = in.front, back = in.back;
   front.out = in.out / "front", back.out = in.out / "back";
+  // Each side is also counted alone under `orchard side`'s cluster rules.
+  SideOptions side_options = o.side;
+  ClusterOptions one_side = o.side.clusters;
+  one_side.min_points = ClusterOptions().min_points;
+  one_side.max_lost_fraction = ClusterOptions().max_lost_fraction;
+  side_options.one_side_clusters = one_side;
   spdlog::info("[yield 1/4] front side: frames, poses, fruit, 3D clusters -> {}", front.out.string());
-  y.front_side = RunSide(front, o.side);
+  y.front_side = RunSide(front, side_options);
   timings["front side"] = stopwatch.Lap();
   spdlog::info("[yield 2/4] back side -> {}", back.out.string());
-  y.back_side = RunSide(back, o.side);
+  y.back_side = RunSide(back, side_options);
   timings["back side"] = stopwatch.Lap();
   for (const auto& [name, s] : {std::pair<std::string, const SideSummary*>{"front", &y.front_side}, {"back", &y.back_side}}) {
     timings[name + ": poses"] = s->poses_s;
@@ -193,8 +200,10 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
     UpdateClusterExtent(&c);
   }
   const SharedCount shared = CountSharedApples(front_cloud.clusters, back_in_front, o.shared);
-  y.front = shared.front, y.back = shared.back, y.shared = shared.shared, y.total = shared.total;
-  y.sum_of_sides = shared.front + shared.back;
+  y.merge_front = shared.front, y.merge_back = shared.back, y.merge_shared = shared.shared, y.total = shared.total;
+  y.front = y.front_side.one_side_count, y.back = y.back_side.one_side_count;
+  y.sum_of_sides = y.front + y.back;
+  y.shared = y.sum_of_sides - y.total;
 
   // Per-metre map: each cluster's count minus half of what it shares.
   std::vector<MapCluster> map;
@@ -224,6 +233,9 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
   for (const SideCloud* cloud : {&front_cloud, &back_cloud})
     for (const auto& w : cloud->warnings) warnings.push_back(cloud->name + ": " + w);
   for (const auto& w : level_warnings) warnings.push_back(w);
+  if (y.shared < 0)
+    warnings.push_back("the merged total exceeds the sum of the sides' own counts: the sides' counts are not "
+                       "consistent with their merge");
   if (o.poses_registered && y.registration.matched < o.registration.min_matched)
     warnings.push_back("the given poses match only " + std::to_string(y.registration.matched) +
                        " clusters across the sides: are they really in one frame?");
@@ -235,6 +247,12 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
       {"back", y.back},
       {"sum_of_sides", y.sum_of_sides},
       {"shared", std::round(y.shared * 10) / 10},
+      {"merge", {{"front_clusters", y.merge_front},
+                 {"back_clusters", y.merge_back},
+                 {"shared", std::round(y.merge_shared * 10) / 10},
+                 {"note", "total = front_clusters + back_clusters - shared: the sides' clusters kept for the merge "
+                          "(5 fruit points, ghosts removed) and the apples the inclusion-exclusion counted once; "
+                          "front and back above are each side's own count (orchard side's rules)"}}},
       {"per_metre", per_metre},
       {"bin_length_m", o.bin_length},
       {"alignment", AlignmentJson(y.registration, method)},

@@ -18,11 +18,13 @@ namespace orchard {
 namespace fs = std::filesystem;
 
 struct YieldOptions {
-  // Each side's clusters need 5 fruit points here (1 for `orchard side`) and
-  // ghosts (clusters whose points land mostly on other clusters' blobs) are
-  // dropped: a one-side count profits from chance clusters that make up for
-  // missed apples, but in the union of two sides both sides' chance clusters
-  // add up (docs/yield.md).
+  // For the merge, each side's clusters need 5 fruit points here (1 for
+  // `orchard side`) and ghosts (clusters whose points land mostly on other
+  // clusters' blobs) are dropped: a one-side count profits from chance
+  // clusters that make up for missed apples, but in the union of two sides
+  // both sides' chance clusters add up (docs/yield.md). The per-side counts
+  // reported are each side's own count under `orchard side`'s rules, on the
+  // same fruit points: the merge's clusters count a side alone 7% low.
   YieldOptions() {
     side.clusters.min_points = 5;
     side.clusters.max_lost_fraction = 0.6;
@@ -60,9 +62,17 @@ struct YieldInputs {
 
 struct YieldSummary {
   int total = 0;         // the row's estimate: shared apples counted once
+  // Each side's own count (`orchard side`'s rules), their unmerged sum, and
+  // the apples seen from both sides that the merge counted once: front +
+  // back - total.
   int front = 0, back = 0;
-  int sum_of_sides = 0;  // front + back, unmerged
-  double shared = 0;     // apples seen from both sides
+  int sum_of_sides = 0;
+  double shared = 0;
+  // The merge itself: the counts of each side's merge clusters and the
+  // apples the inclusion-exclusion took off (total = merge_front +
+  // merge_back - merge_shared).
+  int merge_front = 0, merge_back = 0;
+  double merge_shared = 0;
   SideSummary front_side, back_side;
   Registration registration;
 };

@@ -63,7 +63,15 @@ TEST_F(YieldTest, MergesBothSidesAndResumes) {
   const int visible_any = truth.at("visible_any").get<int>(), visible_both = truth.at("visible_both").get<int>();
   ASSERT_GT(visible_both, 5);
   EXPECT_EQ(y.sum_of_sides, y.front + y.back);
-  EXPECT_GT(y.shared, 0.3 * visible_both);
+  EXPECT_EQ(y.shared, y.sum_of_sides - y.total);
+  EXPECT_EQ(y.total, y.merge_front + y.merge_back - y.merge_shared);
+  // Each side's own count is what `orchard side` gives on that side.
+  EXPECT_EQ(y.front, y.front_side.one_side_count);
+  EXPECT_EQ(y.back, y.back_side.one_side_count);
+  const int visible_front = truth.at("visible_front").get<int>(), visible_back = truth.at("visible_back").get<int>();
+  EXPECT_NEAR(y.front, visible_front, 0.08 * visible_front);
+  EXPECT_NEAR(y.back, visible_back, 0.08 * visible_back);
+  EXPECT_NEAR(y.shared, visible_both, 0.1 * visible_both);
   // 133 for 137 visible when written (-2.9%); docs/yield.md measures
   // four-tree rows. The unmerged sum over-counts far more (179).
   EXPECT_NEAR(y.total, visible_any, 0.08 * visible_any) << "visible_any " << visible_any;
