@@ -2,7 +2,8 @@
 // frames, in one run: the fast superpixels on the downscaled frame vs OpenCV's
 // SLIC at full resolution, each run as `orchard detect` runs it (one
 // single-threaded detector per core, as many frames at once); the fast path
-// also one frame at a time on every core (the latency of a frame). Frames are mosaics of 3x2 annotated 640x640 crops
+// also one frame at a time on every core (the latency of a frame). Frames are
+// mosaics of 3x2 annotated 640x640 crops
 // (held-out photos), cut to 1080 rows; boxes are shifted, and those cut by the
 // frame edge are clipped (dropped when less than half remains).
 //

@@ -49,7 +49,9 @@ void AddDetectCommand(CLI::App& app) {
   cmd->add_option("--step", args->frames.step, "Keep every n-th frame")->capture_default_str();
   cmd->add_option("--max-frames", args->frames.max_frames, "Stop after this many frames (0 = all)")
       ->capture_default_str();
-  cmd->add_option("--threads", args->detector.threads, "Threads (0 = all cores)")->capture_default_str();
+  cmd->add_option("--threads", args->detector.threads,
+                  "Threads (0 = all cores): gmm detects this many frames at once, unet runs its network on them")
+      ->capture_default_str();
   cmd->callback([args]() {
     // Frames run in parallel (one colour detector per core); results arrive in order.
     const std::vector<std::unique_ptr<Detector>> detectors = MakeFrameDetectors(args->detector);
