@@ -28,6 +28,16 @@ GmmDetector::GmmDetector(const ColourModel& model, const GmmDetectorOptions& opt
 
 namespace {
 
+// The working column / row under each frame column / row: cv::resize's
+// nearest-neighbour mapping (frame pixel i under floor(i * working / frame)),
+// by which the working blob labels are scaled up.
+std::vector<int> WorkingIndexOf(int frame, int working) {
+  std::vector<int> w(frame);
+  for (int i = 0; i < frame; ++i)
+    w[i] = std::min(working - 1, static_cast<int>(std::floor(i * static_cast<double>(working) / frame)));
+  return w;
+}
+
 // Fast path: redraws the blob edges at frame resolution. `d` holds the blobs
 // found at working resolution with their labels scaled up (nearest), so
 // their edges are quantised to 1 / scale frame pixels (2.7 px at the default
@@ -67,19 +77,15 @@ void RefineEdgesAtFrameResolution(const cv::Mat& bgr, const SegmentedFrame& f, c
   cv::dilate(blob_mask, grown, cv::Mat());
   cv::erode(blob_mask, shrunk, cv::Mat());
   cv::compare(grown, shrunk, edge, cv::CMP_NE);
-  // Frame pixels [first[w], first[w + 1]) lie under working column / row w
-  // (cv::resize's nearest-neighbour mapping: frame pixel i under floor(i * working / frame)).
+  // Frame pixels [first[w], first[w + 1]) lie under working column / row w.
   auto first_of = [](int frame, int working) {
+    const std::vector<int> working_of = WorkingIndexOf(frame, working);
     std::vector<int> first(working + 1, frame);
-    for (int i = frame - 1; i >= 0; --i) {
-      const int w = std::min(working - 1, static_cast<int>(std::floor(i * static_cast<double>(working) / frame)));
-      first[w] = i;
-    }
+    for (int i = frame - 1; i >= 0; --i) first[working_of[i]] = i;
     for (int w = working - 1; w >= 0; --w) first[w] = std::min(first[w], first[w + 1]);
     return first;
   };
   const std::vector<int> first_x = first_of(bgr.cols, ww), first_y = first_of(bgr.rows, wh);
-  // Visits the frame pixels under the edge working pixels, always in the same order.
   // Visits the frame pixels under the edge working pixels, always in the same
   // order; enter_cell(working pixel) is called before the pixels under it.
   auto for_each_edge_pixel = [&](auto&& enter_cell, auto&& visit) {
@@ -95,7 +101,10 @@ void RefineEdgesAtFrameResolution(const cv::Mat& bgr, const SegmentedFrame& f, c
   };
   std::vector<cv::Vec3b> gathered;
   for_each_edge_pixel([](cv::Point) {}, [&](cv::Point p) { gathered.push_back(bgr.at<cv::Vec3b>(p)); });
-  if (gathered.empty()) return;  // no blob
+  if (gathered.empty()) {  // no blob edge (no blob, or one covering the frame)
+    RegroupBlobsAtFrameResolution(working_scores, min_pixels, d);
+    return;
+  }
   cv::Mat3b colours(static_cast<int>(gathered.size()), 1, gathered.data());
   cv::cvtColor(colours, colours, cv::COLOR_BGR2Lab);
   const double spatial = (compactness / region_size) * (compactness / region_size);
@@ -156,7 +165,8 @@ FrameDetection GmmDetector::Detect(const cv::Mat& bgr) {
   const double area_scale = f.scale * f.scale;
   blob_options.min_pixels = std::max(1, static_cast<int>(std::lround(options_.blobs.min_pixels * area_scale)));
   FrameDetection d = ExtractBlobs(mask, blob_options);
-  ScoreBlobs(scores, &d);
+  const bool regroup = f.scale < 1.0 && options_.refine_edges;
+  if (!regroup) ScoreBlobs(scores, &d);  // else the regrouped blobs are scored
   if (f.scale == 1.0) return d;
   // Back to frame resolution.
   const double inv = 1.0 / f.scale;
@@ -171,7 +181,7 @@ FrameDetection GmmDetector::Detect(const cv::Mat& bgr) {
   const cv::Mat1i working_blobs = d.labels;
   d.labels = labels;
   cv::compare(labels, 0, d.mask, cv::CMP_GT);
-  if (options_.refine_edges)
+  if (regroup)
     RefineEdgesAtFrameResolution(bgr, f, working_blobs, scores, segmentation_.superpixels.compactness,
                                  segmentation_.superpixels.region_size, options_.blobs.min_pixels, &d);
   return d;
@@ -182,14 +192,7 @@ void RegroupBlobsAtFrameResolution(const cv::Mat1f& working_scores, int min_pixe
   const int ww = working_scores.cols, wh = working_scores.rows;
   if (ww < 1 || wh < 1 || ww > width || wh > height) Fail("working scores must not be larger than the frame");
   if (d->mask.size() != d->labels.size()) Fail("blob mask and labels differ in size");
-  // Working column / row under each frame column / row (cv::resize's nearest
-  // mapping, as the labels were scaled up).
-  auto working_of = [](int frame, int working) {
-    std::vector<int> w(frame);
-    for (int i = 0; i < frame; ++i) w[i] = std::min(working - 1, static_cast<int>(std::floor(i * static_cast<double>(working) / frame)));
-    return w;
-  };
-  const std::vector<int> wx_of = working_of(width, ww), wy_of = working_of(height, wh);
+  const std::vector<int> wx_of = WorkingIndexOf(width, ww), wy_of = WorkingIndexOf(height, wh);
   const int grow_x = (width + ww - 1) / ww + 1, grow_y = (height + wh - 1) / wh + 1;
   std::vector<Blob> blobs;
   std::vector<cv::Rect> rois;
