@@ -2,6 +2,7 @@
 // for its test-time variants (horizontal flip, rotations of +-5 degrees), one
 // CSV row per patch and variant. Decision rules (argmax, flip averaging,
 // expected count) are compared on these outputs without rerunning the network.
+// A counter with a density head also gives its map's sum (column `density`).
 //   counter_probs COUNTER.pt OUT.csv PATCH_DIR...
 #include <cstdio>
 #include <fstream>
@@ -44,7 +45,8 @@ int main(int argc, char** argv) {
     net->eval();
     torch::NoGradGuard no_grad;
     std::ofstream out(argv[2]);
-    out << "set,index,count,variant,p0,p1,p2,p3,p4,p5,p6\n";
+    const bool density = net->options().density_head;
+    out << "set,index,count,variant,p0,p1,p2,p3,p4,p5,p6,density\n";
     const char* variants[] = {"plain", "hflip", "rot+5", "rot-5", "vflip"};
     for (int a = 3; a < argc; ++a) {
       const std::vector<orchard::nn::LabelledPatch> patches = orchard::nn::ReadPatchFolder(argv[a]);
@@ -60,11 +62,21 @@ int main(int argc, char** argv) {
         }
         for (size_t begin = 0; begin < inputs.size(); begin += 64) {
           const size_t end = std::min(inputs.size(), begin + 64);
-          const torch::Tensor probs =
-              torch::softmax(net->forward(orchard::nn::ImagesToTensor({inputs.begin() + begin, inputs.begin() + end})), 1);
+          const torch::Tensor batch = orchard::nn::ImagesToTensor({inputs.begin() + begin, inputs.begin() + end});
+          torch::Tensor logits, sums;
+          if (density) {
+            auto [l, map] = net->ForwardWithDensity(batch);
+            logits = l;
+            sums = map.sum({1, 2, 3});
+          } else {
+            logits = net->forward(batch);
+          }
+          const torch::Tensor probs = torch::softmax(logits, 1);
           for (size_t i = begin; i < end; ++i) {
             out << argv[a] << ',' << i << ',' << patches[i].count << ',' << variants[v];
             for (int k = 0; k < 7; ++k) out << ',' << probs[i - begin][k].item<float>();
+            out << ',';
+            if (density) out << sums[i - begin].item<float>();
             out << '\n';
           }
         }

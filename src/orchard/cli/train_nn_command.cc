@@ -76,6 +76,13 @@ void AddTrainNetworkCommands(CLI::App& app) {
                       "Class balancing: 1 = every class up-sampled to the largest (the study's), 0.5 = halfway "
                       "(square root), 0 = the data's own class frequencies")
       ->capture_default_str();
+  counter->add_option("--density-weight", c->options.density_weight,
+                      "Weight of a density head trained on the apples' positions in box-annotated patches, a "
+                      "second task that teaches the network where each apple is (0 = no head)")
+      ->capture_default_str();
+  counter->add_option("--density-sigma", c->options.density_sigma,
+                      "Spread of each apple's target density, in cells of 1/8 of the input")
+      ->capture_default_str();
   counter->add_option("--background", c->patch_options.background_per_image, "Background patches per image")
       ->capture_default_str();
   AddTrainerOptions(counter, &c->options.trainer, &c->state);

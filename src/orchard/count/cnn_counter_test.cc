@@ -77,6 +77,41 @@ TEST(CnnCounter, TrainsReloadsAndCounts) {
   EXPECT_THROW(as_counter.CountMany(test, {cv::Mat1b(3, 3)}), Error);  // one mask for 30 patches
 }
 
+// A counter with the density head learns from the discs' positions where they
+// are known and from the count alone where not; it loads and counts like any.
+TEST(CnnCounter, DensityHeadTrainsOnPointsAndReloads) {
+  const fs::path dir = TempDir("density");
+  std::mt19937_64 rng(7);
+  std::vector<nn::LabelledPatch> patches;
+  for (int i = 0; i < 60; ++i) {
+    const int count = i % 3;
+    cv::Mat patch(48, 48, CV_8UC3, cv::Scalar(40, 140, 40));
+    std::vector<cv::Point2f> centres;
+    for (int k = 0; k < count; ++k) {
+      centres.emplace_back(12 + 24 * k, 14 + rng() % 20);
+      cv::circle(patch, centres.back(), 7, cv::Scalar(30, 30, 200), -1);
+    }
+    patches.push_back({patch, count, "photo" + std::to_string(i % 6), centres, i % 4 != 0});
+  }
+  nn::CounterTrainingOptions options;
+  options.architecture.base_width = 4;
+  options.input_size = 32;
+  options.density_weight = 1;
+  options.trainer.max_epochs = 5;
+  options.trainer.patience = 5;
+  options.trainer.progress = false;
+  options.trainer.threads = 1;
+  const nn::CounterTrainingResult result = TrainCounter(patches, options, {{"source", "test"}}, dir / "counter.pt");
+  EXPECT_LT(result.record.train_loss.back(), result.record.train_loss.front());
+  EXPECT_TRUE(nn::ReadCheckpointHeader(dir / "counter.pt", "counter")["architecture"]["density_head"].get<bool>());
+  CnnCounter counter(dir / "counter.pt", 1);
+  std::vector<cv::Mat> test;
+  for (int i = 0; i < 6; ++i) test.push_back(patches[i].bgr);
+  EXPECT_EQ(CnnCounter(dir / "counter.pt", 1).CountBatch(test), counter.CountBatch(test));
+  options.density_sigma = 0;
+  EXPECT_THROW(options.Check(), Error);
+}
+
 TEST(CnnCounter, FlipAverageIsMirrorInvariant) {
   const fs::path dir = TempDir("flip");
   torch::manual_seed(2);

@@ -85,7 +85,12 @@ std::vector<CountPatch> MakeCountPatches(const Dataset& dataset, const CountPatc
       if (!any_real || static_cast<int>(group.size()) > options.max_count) continue;
       const cv::Rect crop = ClusterPatchRect(u, image.width, image.height, options);
       if (crop.width < 2 || crop.height < 2) continue;
-      patches.push_back({image.name, crop, static_cast<int>(group.size())});
+      std::vector<cv::Point2f> centres;
+      for (int i : group) {
+        centres.emplace_back(static_cast<float>((boxes[i].x1 + boxes[i].x2) / 2 - crop.x - 0.5),
+                             static_cast<float>((boxes[i].y1 + boxes[i].y2) / 2 - crop.y - 0.5));
+      }
+      patches.push_back({image.name, crop, static_cast<int>(group.size()), std::move(centres)});
       sides.push_back(std::max(crop.width, crop.height));
     }
     // Background windows sized like this image's clusters (or a tenth of the
@@ -102,7 +107,7 @@ std::vector<CountPatch> MakeCountPatches(const Dataset& dataset, const CountPatc
         const bool free = std::none_of(boxes.begin(), boxes.end(),
                                        [&](const Box& box) { return IntersectionArea(box, window) > 0; });
         if (!free) continue;
-        patches.push_back({image.name, crop, 0});
+        patches.push_back({image.name, crop, 0, {}});
         break;
       }
     }

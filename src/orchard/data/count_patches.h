@@ -37,6 +37,9 @@ struct CountPatch {
   std::string image;  // name of the source image in the dataset
   cv::Rect crop;      // inside the image
   int count = 0;
+  // Centres of the cluster's boxes in crop pixel coordinates (empty for
+  // background): point supervision for a counter that also learns where.
+  std::vector<cv::Point2f> centres;
 };
 
 // The crop of a cluster box as the counting patches cut it: `options.margin`

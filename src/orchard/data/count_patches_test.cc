@@ -44,9 +44,17 @@ TEST(CountPatches, LabelsClustersLeavesOutLargeOnesAndAddsBackground) {
   EXPECT_EQ(patches[0].crop, cv::Rect(96, 96, 47, 28));
   EXPECT_EQ(counts[1], 1);
   EXPECT_EQ(patches[1].crop, cv::Rect(0, 0, 18, 18));  // 0..15 box, minimum margin 3 -> [-3, 18], clamped at 0
+  // Each cluster patch carries its boxes' centres in crop pixels (box 100..120 -> centre pixel 109.5).
+  ASSERT_EQ(patches[0].centres.size(), 2u);
+  EXPECT_FLOAT_EQ(patches[0].centres[0].x, 109.5f - 96);
+  EXPECT_FLOAT_EQ(patches[0].centres[0].y, 109.5f - 96);
+  EXPECT_FLOAT_EQ(patches[0].centres[1].x, 128.5f - 96);
+  ASSERT_EQ(patches[1].centres.size(), 1u);
+  EXPECT_FLOAT_EQ(patches[1].centres[0].x, 7.0f);
   EXPECT_EQ(counts[2], 0);
   EXPECT_EQ(counts[3], 0);
   for (int k = 2; k < 4; ++k) {
+    EXPECT_TRUE(patches[k].centres.empty());
     for (const auto& o : image.objects) {
       const cv::Rect& c = patches[k].crop;
       EXPECT_EQ(IntersectionArea(o.box, Box{double(c.x), double(c.y), double(c.x + c.width), double(c.y + c.height)}), 0.0);

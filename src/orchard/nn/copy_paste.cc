@@ -39,7 +39,7 @@ AppleSprite SpriteFromSingleApplePatch(const cv::Mat& bgr, const CopyPasteOption
 }
 
 cv::Mat ComposeCluster(const std::vector<const AppleSprite*>& sprites, const cv::Mat& background,
-                       const CopyPasteOptions& options, std::mt19937_64& rng) {
+                       const CopyPasteOptions& options, std::mt19937_64& rng, std::vector<cv::Point2f>* centres_out) {
   if (sprites.empty()) Fail("a cluster needs at least one sprite");
   if (background.empty() || background.type() != CV_8UC3) Fail("a cluster needs an 8-bit BGR background");
   // Centres: each new apple touches a random earlier one and keeps its distance from all.
@@ -73,6 +73,12 @@ cv::Mat ComposeCluster(const std::vector<const AppleSprite*>& sprites, const cv:
   }
   const double m = std::max<double>(options.min_margin, options.margin * std::max(x1 - x0, y1 - y0));
   const int width = static_cast<int>(std::ceil(x1 - x0 + 2 * m)), height = static_cast<int>(std::ceil(y1 - y0 + 2 * m));
+  if (centres_out) {
+    centres_out->clear();
+    for (const cv::Point2d& c : centres) {
+      centres_out->emplace_back(static_cast<float>(c.x - x0 + m - 0.5), static_cast<float>(c.y - y0 + m - 0.5));
+    }
+  }
   cv::Mat canvas;
   cv::resize(background, canvas, cv::Size(width, height), 0, 0, cv::INTER_LINEAR);
   canvas.convertTo(canvas, CV_32FC3);
@@ -123,7 +129,7 @@ CopyPasteSource::CopyPasteSource(const std::vector<cv::Mat>& bgr, const std::vec
   }
 }
 
-cv::Mat CopyPasteSource::Compose(int count, std::mt19937_64& rng) const {
+cv::Mat CopyPasteSource::Compose(int count, std::mt19937_64& rng, std::vector<cv::Point2f>* centres) const {
   if (photos_.empty()) Fail("copy-paste source has no photo with background and single apples");
   if (count < 1) Fail("a composite needs at least one apple, got ", count);
   const Photo& photo = photos_[rng() % photos_.size()];
@@ -144,7 +150,7 @@ cv::Mat CopyPasteSource::Compose(int count, std::mt19937_64& rng) const {
   }
   std::vector<const AppleSprite*> chosen;
   for (const AppleSprite& sprite : resized) chosen.push_back(&sprite);
-  return ComposeCluster(chosen, photo.backgrounds[rng() % photo.backgrounds.size()], options_, rng);
+  return ComposeCluster(chosen, photo.backgrounds[rng() % photo.backgrounds.size()], options_, rng, centres);
 }
 
 }  // namespace orchard::nn

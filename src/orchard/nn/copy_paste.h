@@ -51,8 +51,10 @@ AppleSprite SpriteFromSingleApplePatch(const cv::Mat& bgr, const CopyPasteOption
 // A cluster of sprites.size() apples: the first in the middle, every further
 // one touching a random earlier one; pasted in a random order onto
 // `background` stretched to the cluster box plus the margin, and cut there.
+// `centres` (optional) receives the apples' centres in the composite's pixels.
 cv::Mat ComposeCluster(const std::vector<const AppleSprite*>& sprites, const cv::Mat& background,
-                       const CopyPasteOptions& options, std::mt19937_64& rng);
+                       const CopyPasteOptions& options, std::mt19937_64& rng,
+                       std::vector<cv::Point2f>* centres = nullptr);
 
 // Sprites and backgrounds grouped by photo, so a composite keeps one photo's
 // scale and light.
@@ -65,7 +67,7 @@ class CopyPasteSource {
   bool empty() const { return photos_.empty(); }
   size_t num_photos() const { return photos_.size(); }
   // A composite of `count` apples (sprites and background from one random photo).
-  cv::Mat Compose(int count, std::mt19937_64& rng) const;
+  cv::Mat Compose(int count, std::mt19937_64& rng, std::vector<cv::Point2f>* centres = nullptr) const;
 
  private:
   struct Photo {

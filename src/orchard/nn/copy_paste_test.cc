@@ -41,8 +41,20 @@ TEST(CopyPaste, ComposedClusterShowsEveryApple) {
     const int n = 2 + trial % 5;
     std::vector<const AppleSprite*> chosen;
     for (int k = 0; k < n; ++k) chosen.push_back(&sprites[k]);
-    const cv::Mat cluster = ComposeCluster(chosen, background, options, rng);
+    std::vector<cv::Point2f> centres;
+    const cv::Mat cluster = ComposeCluster(chosen, background, options, rng, &centres);
     ASSERT_EQ(cluster.type(), CV_8UC3);
+    // The centres handed back are those of the pasted apples: each lies on
+    // the apple of its own colour, unless a later apple covers it.
+    ASSERT_EQ(centres.size(), static_cast<size_t>(n));
+    int on_own_apple = 0;
+    for (int k = 0; k < n; ++k) {
+      const cv::Point c(cvRound(centres[k].x), cvRound(centres[k].y));
+      ASSERT_TRUE(cv::Rect(0, 0, cluster.cols, cluster.rows).contains(c));
+      const cv::Vec3b pixel = cluster.at<cv::Vec3b>(c);
+      on_own_apple += cv::norm(cv::Scalar(pixel[0], pixel[1], pixel[2]) - colours[k]) < 35;
+    }
+    EXPECT_GE(on_own_apple, n - 1) << "trial " << trial;
     // At least the apples' box and the margin; no more than n apples side by side.
     EXPECT_GE(std::max(cluster.cols, cluster.rows), 30 + 6);
     EXPECT_LE(std::max(cluster.cols, cluster.rows), (30 * n) * 1.2 + 8);

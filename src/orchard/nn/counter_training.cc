@@ -4,6 +4,7 @@
 #include <cmath>
 #include <map>
 #include <memory>
+#include <optional>
 #include <regex>
 #include <set>
 
@@ -17,17 +18,45 @@ namespace orchard::nn {
 namespace {
 
 constexpr int kClasses = 7;
+// The density map's squared error against its target, relative to the count term.
+constexpr double kDensityMapWeight = 10;
+
+// Target density at the map's cells: a Gaussian of `sigma` cells around each
+// centre (input pixels), each normalised to sum 1 so the map sums to the count.
+torch::Tensor DensityTarget(const std::vector<cv::Point2f>& centres, int input_size, int64_t rows, int64_t cols,
+                            double sigma) {
+  torch::Tensor target = torch::zeros({1, rows, cols});
+  const double stride_x = static_cast<double>(input_size) / cols, stride_y = static_cast<double>(input_size) / rows;
+  auto t = target.accessor<float, 3>();
+  for (const cv::Point2f& c : centres) {
+    std::vector<double> w(rows * cols);
+    double total = 0;
+    for (int64_t i = 0; i < rows; ++i) {
+      for (int64_t j = 0; j < cols; ++j) {
+        const double dx = (c.x + 0.5) / stride_x - (j + 0.5), dy = (c.y + 0.5) / stride_y - (i + 0.5);
+        total += w[i * cols + j] = std::exp(-(dx * dx + dy * dy) / (2 * sigma * sigma));
+      }
+    }
+    if (total <= 0) continue;
+    for (int64_t i = 0; i < rows; ++i) {
+      for (int64_t j = 0; j < cols; ++j) t[0][i][j] += static_cast<float>(w[i * cols + j] / total);
+    }
+  }
+  return target;
+}
 
 class CounterTask : public TrainingTask {
  public:
   CounterTask(ResNet net, const CounterTrainingOptions& options, std::vector<cv::Mat> train_images,
-              std::vector<int> train_labels, std::vector<cv::Mat> val_images, std::vector<int> val_labels,
-              const CopyPasteSource* copy_paste, std::function<void()> save_best)
+              std::vector<int> train_labels, std::vector<std::optional<std::vector<cv::Point2f>>> train_centres,
+              std::vector<cv::Mat> val_images, std::vector<int> val_labels, const CopyPasteSource* copy_paste,
+              std::function<void()> save_best)
       : net_(net),
         copy_paste_(copy_paste),
         options_(options),
         train_images_(std::move(train_images)),
         train_labels_(std::move(train_labels)),
+        train_centres_(std::move(train_centres)),
         val_images_(std::move(val_images)),
         val_labels_(std::move(val_labels)),
         save_best_(std::move(save_best)) {
@@ -35,20 +64,44 @@ class CounterTask : public TrainingTask {
   }
   size_t NumTrain() const override { return balanced_.size(); }
   torch::Tensor TrainLoss(const std::vector<size_t>& indices, std::mt19937_64& rng) override {
+    const bool density = net_->options().density_head;
     std::vector<cv::Mat> images;
     std::vector<int64_t> labels;
+    std::vector<std::optional<std::vector<cv::Point2f>>> centres;  // input pixels, where known
     for (size_t i : indices) {
       const size_t sample = balanced_[i];
       const int label = train_labels_[sample];
+      std::optional<std::vector<cv::Point2f>> points;
       if (copy_paste_ && label >= 1 && Uniform01(rng) < options_.copy_paste.probability) {
-        images.push_back(
-            AugmentPatch(LetterboxPatch(copy_paste_->Compose(label, rng), options_.input_size), options_.augmentation, rng));
+        std::vector<cv::Point2f> pasted;
+        const cv::Mat composite = copy_paste_->Compose(label, rng, density ? &pasted : nullptr);
+        for (cv::Point2f& p : pasted) p = LetterboxPoint(composite.size(), options_.input_size, p);
+        if (density) points = std::move(pasted);
+        images.push_back(AugmentPatch(LetterboxPatch(composite, options_.input_size), options_.augmentation, rng,
+                                      points ? &*points : nullptr));
       } else {
-        images.push_back(AugmentPatch(train_images_[sample], options_.augmentation, rng));
+        if (density) points = train_centres_[sample];
+        images.push_back(AugmentPatch(train_images_[sample], options_.augmentation, rng, points ? &*points : nullptr));
       }
       labels.push_back(label);
+      centres.push_back(std::move(points));
     }
-    return torch::cross_entropy_loss(net_->forward(ImagesToTensor(images)), torch::tensor(labels, torch::kLong));
+    const torch::Tensor input = ImagesToTensor(images), target = torch::tensor(labels, torch::kLong);
+    if (!density) return torch::cross_entropy_loss(net_->forward(input), target);
+    auto [logits, map] = net_->ForwardWithDensity(input);
+    torch::Tensor loss = torch::cross_entropy_loss(logits, target);
+    const torch::Tensor count_loss =
+        torch::smooth_l1_loss(map.sum({1, 2, 3}), target.to(torch::kFloat32));
+    std::vector<torch::Tensor> map_errors;
+    for (size_t k = 0; k < centres.size(); ++k) {
+      if (!centres[k]) continue;
+      const torch::Tensor want =
+          DensityTarget(*centres[k], options_.input_size, map.size(2), map.size(3), options_.density_sigma);
+      map_errors.push_back((map[k] - want).pow(2).sum());
+    }
+    torch::Tensor density_loss = count_loss;
+    if (!map_errors.empty()) density_loss = density_loss + kDensityMapWeight * torch::stack(map_errors).mean();
+    return loss + options_.density_weight * density_loss;
   }
   double Validate() override {
     if (val_images_.empty()) return 0;
@@ -70,6 +123,7 @@ class CounterTask : public TrainingTask {
   const CounterTrainingOptions& options_;
   std::vector<cv::Mat> train_images_;
   std::vector<int> train_labels_;
+  std::vector<std::optional<std::vector<cv::Point2f>>> train_centres_;  // letterboxed, where known
   std::vector<cv::Mat> val_images_;
   std::vector<int> val_labels_;
   std::vector<size_t> balanced_;
@@ -110,7 +164,7 @@ std::vector<LabelledPatch> ReadPatchFolder(const fs::path& dir) {
     // Patches sit beside counts.csv or in images/ below it (the synthetic generator's layout).
     std::error_code exists_ec;
     const fs::path path = fs::exists(dir / entry.name, exists_ec) ? dir / entry.name : dir / "images" / entry.name;
-    patches.push_back({ReadImage(path), entry.count, PatchPhotoId(entry.name)});
+    patches.push_back({ReadImage(path), entry.count, PatchPhotoId(entry.name), {}, false});
   }
   if (patches.empty()) Fail("patch folder ", dir.string(), " has no patches");
   return patches;
@@ -128,7 +182,7 @@ std::vector<LabelledPatch> CutDatasetPatches(const Dataset& dataset, const Count
       current = patch.image;
     }
     patches.push_back({image(patch.crop & cv::Rect(0, 0, image.cols, image.rows)).clone(), patch.count,
-                       PhotoId(patch.image)});
+                       PhotoId(patch.image), patch.centres, true});
   }
   return patches;
 }
@@ -142,6 +196,8 @@ void CounterTrainingOptions::Check() const {
   ORCHARD_CHECK_OPTION(input_size >= 32 && input_size <= 512, "input size must be in [32, 512], got ", input_size);
   ORCHARD_CHECK_OPTION(learning_rate > 0, "learning rate must be positive, got ", learning_rate);
   ORCHARD_CHECK_OPTION(balance_power >= 0 && balance_power <= 1, "balance power must be in [0, 1], got ", balance_power);
+  ORCHARD_CHECK_OPTION(density_weight >= 0, "density weight must be >= 0, got ", density_weight);
+  ORCHARD_CHECK_OPTION(density_sigma > 0, "density sigma must be positive, got ", density_sigma);
   ORCHARD_CHECK_OPTION(validation_fraction > 0 && validation_fraction < 1, "validation fraction must be in (0, 1), got ",
                        validation_fraction);
 }
@@ -159,6 +215,7 @@ CounterTrainingResult TrainCounter(const std::vector<LabelledPatch>& patches, co
   result.train_class_counts.assign(kClasses, 0);
   std::vector<cv::Mat> train_images, val_images, train_originals;
   std::vector<int> train_labels, val_labels;
+  std::vector<std::optional<std::vector<cv::Point2f>>> train_centres;
   std::vector<std::string> train_photos;
   for (const LabelledPatch& p : patches) {
     cv::Mat input = LetterboxPatch(p.bgr, options.input_size);
@@ -170,6 +227,12 @@ CounterTrainingResult TrainCounter(const std::vector<LabelledPatch>& patches, co
       train_labels.push_back(p.count);
       train_originals.push_back(p.bgr);
       train_photos.push_back(p.photo);
+      std::optional<std::vector<cv::Point2f>> centres;
+      if (p.has_centres) {
+        centres.emplace();
+        for (const cv::Point2f& c : p.centres) centres->push_back(LetterboxPoint(p.bgr.size(), options.input_size, c));
+      }
+      train_centres.push_back(std::move(centres));
       ++result.train_class_counts[p.count];
     }
   }
@@ -185,9 +248,11 @@ CounterTrainingResult TrainCounter(const std::vector<LabelledPatch>& patches, co
   result.validation_patches = static_cast<int>(val_images.size());
 
   SetUpTorch(options.trainer);
-  ResNet net(options.architecture);
+  ResNetOptions architecture = options.architecture;
+  architecture.density_head = options.density_weight > 0;
+  ResNet net(architecture);
   nlohmann::json header = {{"kind", "counter"},
-                           {"architecture", options.architecture.ToJson()},
+                           {"architecture", architecture.ToJson()},
                            {"input_size", options.input_size},
                            {"data", data_description},
                            {"train_patches", result.train_patches},
@@ -196,10 +261,14 @@ CounterTrainingResult TrainCounter(const std::vector<LabelledPatch>& patches, co
                            {"copy_paste_probability", options.copy_paste.probability},
                            {"balance_power", options.balance_power},
                            {"ema_decay", options.trainer.ema_decay}};
+  if (architecture.density_head) {
+    header["density_weight"] = options.density_weight;
+    header["density_sigma"] = options.density_sigma;
+  }
   BestCheckpoint best(model_path);
   auto save_best = [&] { best.Save(*net, header); };
-  CounterTask task(net, options, std::move(train_images), std::move(train_labels), std::move(val_images),
-                   std::move(val_labels), copy_paste.get(), save_best);
+  CounterTask task(net, options, std::move(train_images), std::move(train_labels), std::move(train_centres),
+                   std::move(val_images), std::move(val_labels), copy_paste.get(), save_best);
   torch::optim::Adam adam(net->parameters(),
                           torch::optim::AdamOptions(options.learning_rate).betas(std::make_tuple(0.9, 0.999)));
   result.record = Train(task, *net, adam, options.trainer);

@@ -25,6 +25,10 @@ struct LabelledPatch {
   cv::Mat bgr;        // the patch as cut (any size)
   int count = 0;      // 0..6
   std::string photo;  // source photo id: validation splits keep a photo on one side
+  // The apples' centres in patch pixels, where known (patches cut from box
+  // annotations, empty for background); patch folders carry only counts.
+  std::vector<cv::Point2f> centres;
+  bool has_centres = false;
 };
 
 // A folder with a CodaLab counting file `counts.csv` (`name,count`) and the
@@ -57,6 +61,13 @@ struct CounterTrainingOptions {
   PatchAugmentation augmentation;
   // Composites of real single apples on real background (training photos only).
   CopyPasteOptions copy_paste;
+  // Weight of the density head's loss (0 = no head; the architecture's
+  // density_head follows it). The head's map should sum to the count (smooth
+  // L1, every patch) and, where the apples' centres are known, match a
+  // Gaussian of `density_sigma` cells around each (squared error, x10 so
+  // both terms start at similar size).
+  double density_weight = 0;
+  double density_sigma = 1.0;
   TrainerOptions trainer;  // defaults: 50 epochs, patience 5
 
   void Check() const;

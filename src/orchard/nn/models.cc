@@ -90,7 +90,11 @@ void ResNetOptions::Check() const {
 }
 
 nlohmann::json ResNetOptions::ToJson() const {
-  return {{"depth", depth}, {"base_width", base_width}, {"in_channels", in_channels}, {"num_classes", num_classes}};
+  nlohmann::json json = {
+      {"depth", depth}, {"base_width", base_width}, {"in_channels", in_channels}, {"num_classes", num_classes}};
+  // Written only when on, so files without it read as before.
+  if (density_head) json["density_head"] = true;
+  return json;
 }
 
 ResNetOptions ResNetOptions::FromJson(const nlohmann::json& json) {
@@ -99,6 +103,7 @@ ResNetOptions ResNetOptions::FromJson(const nlohmann::json& json) {
   o.base_width = json.at("base_width").get<int>();
   o.in_channels = json.at("in_channels").get<int>();
   o.num_classes = json.at("num_classes").get<int>();
+  o.density_head = json.value("density_head", false);
   o.Check();
   return o;
 }
@@ -125,6 +130,11 @@ ResNetImpl::ResNetImpl(const ResNetOptions& options) : options_(options) {
         in = width;
       }
     }
+    if (s == 1 && options_.density_head) {
+      density_after_block_ = stages_->size();
+      density_ = register_module("density", ConvBnRelu(in, in, 3, 1));
+      density_->push_back(tnn::Conv2d(tnn::Conv2dOptions(in, 1, 1)));
+    }
   }
   head_ = register_module("head", tnn::Linear(in, options_.num_classes));
 }
@@ -133,6 +143,18 @@ torch::Tensor ResNetImpl::forward(torch::Tensor x) {
   x = stages_->forward(stem_->forward(x));
   x = torch::adaptive_avg_pool2d(x, {1, 1}).flatten(1);
   return head_(x);
+}
+
+std::pair<torch::Tensor, torch::Tensor> ResNetImpl::ForwardWithDensity(torch::Tensor x) {
+  if (!density_) Fail("this ResNet has no density head");
+  x = stem_->forward(x);
+  torch::Tensor density;
+  size_t blocks = 0;
+  for (auto& block : *stages_) {
+    x = block.forward(x);
+    if (++blocks == density_after_block_) density = torch::relu(density_->forward(x));
+  }
+  return {head_(torch::adaptive_avg_pool2d(x, {1, 1}).flatten(1)), density};
 }
 
 void UNetOptions::Check() const {

@@ -21,6 +21,11 @@ struct ResNetOptions {
   int base_width = 64;
   int in_channels = 3;
   int num_classes = 7;  // counts 0..6
+  // A second output: a density map at 1/8 of the input (after the second
+  // stage) whose sum is the count. Trained with the apples' positions as
+  // point supervision, it teaches the shared layers where each apple is; the
+  // classifier stays the counter's answer.
+  bool density_head = false;
 
   void Check() const;
   nlohmann::json ToJson() const;
@@ -32,6 +37,8 @@ class ResNetImpl : public torch::nn::Module {
   explicit ResNetImpl(const ResNetOptions& options);
   // [N, C, H, W] float in [0, 1] (normalised by the caller) -> [N, classes] logits.
   torch::Tensor forward(torch::Tensor x);
+  // Logits and the density map [N, 1, H/8, W/8] (options().density_head only).
+  std::pair<torch::Tensor, torch::Tensor> ForwardWithDensity(torch::Tensor x);
   const ResNetOptions& options() const { return options_; }
 
  private:
@@ -39,6 +46,8 @@ class ResNetImpl : public torch::nn::Module {
   torch::nn::Sequential stem_{nullptr};
   torch::nn::Sequential stages_{nullptr};
   torch::nn::Linear head_{nullptr};
+  torch::nn::Sequential density_{nullptr};
+  size_t density_after_block_ = 0;  // blocks of the first two stages
 };
 TORCH_MODULE(ResNet);
 

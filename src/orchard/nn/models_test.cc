@@ -5,10 +5,13 @@
 #include <fstream>
 #include <sstream>
 
+#include <opencv2/imgproc.hpp>
+
 #include "orchard/core/error.h"
 #include "orchard/nn/checkpoint.h"
 #include "orchard/nn/counter_training.h"
 #include "orchard/nn/losses.h"
+#include "orchard/nn/patch_input.h"
 #include "orchard/nn/trainer.h"
 #include "orchard/core/test_util.h"
 
@@ -24,6 +27,45 @@ TEST(Models, ResNetShapes) {
     EXPECT_EQ(net->forward(torch::rand({2, 3, 64, 64})).sizes(), (std::vector<int64_t>{2, 7})) << depth;
   }
   EXPECT_THROW(ResNet(ResNetOptions{19, 4, 3, 7}), Error);
+}
+
+TEST(Models, ResNetDensityHeadIsASecondOutput) {
+  ResNetOptions options{18, 4, 3, 7};
+  options.density_head = true;
+  ResNet net(options);
+  net->eval();
+  const torch::Tensor x = torch::rand({2, 3, 64, 64});
+  auto [logits, density] = net->ForwardWithDensity(x);
+  EXPECT_EQ(density.sizes(), (std::vector<int64_t>{2, 1, 8, 8}));  // 1/8 of the input
+  EXPECT_GE(density.min().item<float>(), 0.0f);
+  EXPECT_TRUE(torch::equal(logits, net->forward(x)));  // the classifier does not depend on the head
+  EXPECT_TRUE(ResNetOptions::FromJson(options.ToJson()).density_head);
+  // Files written before the head existed have no key and no head.
+  nlohmann::json old = ResNetOptions{18, 4, 3, 7}.ToJson();
+  EXPECT_FALSE(old.contains("density_head"));
+  EXPECT_FALSE(ResNetOptions::FromJson(old).density_head);
+  ResNet plain(ResNetOptions{18, 4, 3, 7});
+  EXPECT_THROW(plain->ForwardWithDensity(x), Error);
+  EXPECT_LT(CountParameters(*plain), CountParameters(*net));
+}
+
+TEST(PatchInput, LetterboxPointAndAugmentationMovePointsWithThePixels) {
+  // A 40x20 patch letterboxed to 64: scale 1.6, placed at rows 16..48.
+  EXPECT_NEAR(LetterboxPoint({40, 20}, 64, {0, 0}).y, 16 + 0.5 * 1.6 - 0.5, 1e-5);
+  EXPECT_NEAR(LetterboxPoint({40, 20}, 64, {39, 19}).x, 39.5 * 1.6 - 0.5, 1e-5);  // the last pixel's centre
+  // A bright pixel and its point stay together through flips and rotations.
+  cv::Mat image(64, 64, CV_8UC3, cv::Scalar::all(0));
+  cv::circle(image, {15, 40}, 3, cv::Scalar::all(255), -1);
+  PatchAugmentation augmentation;
+  augmentation.max_rotation_deg = 20;
+  augmentation.max_blur_sigma = 0;
+  std::mt19937_64 rng(3);
+  for (int trial = 0; trial < 8; ++trial) {
+    std::vector<cv::Point2f> points{{15, 40}};
+    const cv::Mat out = AugmentPatch(image, augmentation, rng, &points);
+    const cv::Point p(cvRound(points[0].x), cvRound(points[0].y));
+    EXPECT_GT(out.at<cv::Vec3b>(p)[0], 200) << "trial " << trial << " point " << points[0];
+  }
 }
 
 TEST(Models, UNetKeepsResolution) {
