@@ -31,6 +31,18 @@ cv::Mat DiscPatch(int count, std::mt19937_64& rng) {
   return patch;
 }
 
+// A counter that trains in a second: width 4, 32-pixel inputs, one thread.
+nn::CounterTrainingOptions TinyCounterOptions(int epochs) {
+  nn::CounterTrainingOptions options;
+  options.architecture.base_width = 4;
+  options.input_size = 32;
+  options.trainer.max_epochs = epochs;
+  options.trainer.patience = epochs;
+  options.trainer.progress = false;
+  options.trainer.threads = 1;
+  return options;
+}
+
 TEST(CnnCounter, TrainsReloadsAndCounts) {
   const fs::path dir = TempDir("train");
   std::mt19937_64 rng(5);
@@ -39,13 +51,7 @@ TEST(CnnCounter, TrainsReloadsAndCounts) {
     const int count = i % 3;
     patches.push_back({DiscPatch(count, rng), count, "photo" + std::to_string(i % 10)});
   }
-  nn::CounterTrainingOptions options;
-  options.architecture.base_width = 4;
-  options.input_size = 32;
-  options.trainer.max_epochs = 6;
-  options.trainer.patience = 6;
-  options.trainer.progress = false;
-  options.trainer.threads = 1;
+  const nn::CounterTrainingOptions options = TinyCounterOptions(6);
   nn::CounterTrainingResult result = TrainCounter(patches, options, {{"source", "test"}}, dir / "counter.pt");
   ASSERT_GE(result.record.epochs_run, 1);
   EXPECT_LT(result.record.train_loss.back(), result.record.train_loss.front());
@@ -93,14 +99,8 @@ TEST(CnnCounter, DensityHeadTrainsOnPointsAndReloads) {
     }
     patches.push_back({patch, count, "photo" + std::to_string(i % 6), centres, i % 4 != 0});
   }
-  nn::CounterTrainingOptions options;
-  options.architecture.base_width = 4;
-  options.input_size = 32;
+  nn::CounterTrainingOptions options = TinyCounterOptions(5);
   options.density_weight = 1;
-  options.trainer.max_epochs = 5;
-  options.trainer.patience = 5;
-  options.trainer.progress = false;
-  options.trainer.threads = 1;
   const nn::CounterTrainingResult result = TrainCounter(patches, options, {{"source", "test"}}, dir / "counter.pt");
   EXPECT_LT(result.record.train_loss.back(), result.record.train_loss.front());
   EXPECT_TRUE(nn::ReadCheckpointHeader(dir / "counter.pt", "counter")["architecture"]["density_head"].get<bool>());

@@ -90,8 +90,7 @@ class CounterTask : public TrainingTask {
     if (!density) return torch::cross_entropy_loss(net_->forward(input), target);
     auto [logits, map] = net_->ForwardWithDensity(input);
     torch::Tensor loss = torch::cross_entropy_loss(logits, target);
-    const torch::Tensor count_loss =
-        torch::smooth_l1_loss(map.sum({1, 2, 3}), target.to(torch::kFloat32));
+    const torch::Tensor count_loss = torch::smooth_l1_loss(map.sum({1, 2, 3}), target.to(torch::kFloat32));
     std::vector<torch::Tensor> map_errors;
     for (size_t k = 0; k < centres.size(); ++k) {
       if (!centres[k]) continue;
