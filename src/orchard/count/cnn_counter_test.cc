@@ -49,7 +49,7 @@ TEST(CnnCounter, TrainsReloadsAndCounts) {
   std::vector<nn::LabelledPatch> patches;
   for (int i = 0; i < 120; ++i) {
     const int count = i % 3;
-    patches.push_back({DiscPatch(count, rng), count, "photo" + std::to_string(i % 10)});
+    patches.push_back({DiscPatch(count, rng), count, "photo" + std::to_string(i % 10), {}, false});
   }
   const nn::CounterTrainingOptions options = TinyCounterOptions(6);
   nn::CounterTrainingResult result = TrainCounter(patches, options, {{"source", "test"}}, dir / "counter.pt");
