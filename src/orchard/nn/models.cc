@@ -139,11 +139,11 @@ ResNetImpl::ResNetImpl(const ResNetOptions& options) : options_(options) {
   head_ = register_module("head", tnn::Linear(in, options_.num_classes));
 }
 
-torch::Tensor ResNetImpl::forward(torch::Tensor x) {
-  x = stages_->forward(stem_->forward(x));
-  x = torch::adaptive_avg_pool2d(x, {1, 1}).flatten(1);
-  return head_(x);
+torch::Tensor ResNetImpl::Classify(const torch::Tensor& features) {
+  return head_(torch::adaptive_avg_pool2d(features, {1, 1}).flatten(1));
 }
+
+torch::Tensor ResNetImpl::forward(torch::Tensor x) { return Classify(stages_->forward(stem_->forward(x))); }
 
 std::pair<torch::Tensor, torch::Tensor> ResNetImpl::ForwardWithDensity(torch::Tensor x) {
   if (!density_) Fail("this ResNet has no density head");
@@ -154,7 +154,7 @@ std::pair<torch::Tensor, torch::Tensor> ResNetImpl::ForwardWithDensity(torch::Te
     x = block.forward(x);
     if (++blocks == density_after_block_) density = torch::relu(density_->forward(x));
   }
-  return {head_(torch::adaptive_avg_pool2d(x, {1, 1}).flatten(1)), density};
+  return {Classify(x), density};
 }
 
 void UNetOptions::Check() const {

@@ -42,6 +42,9 @@ class ResNetImpl : public torch::nn::Module {
   const ResNetOptions& options() const { return options_; }
 
  private:
+  // Global average pooling and the linear head: features -> logits.
+  torch::Tensor Classify(const torch::Tensor& features);
+
   ResNetOptions options_;
   torch::nn::Sequential stem_{nullptr};
   torch::nn::Sequential stages_{nullptr};
