@@ -66,7 +66,8 @@ void AddTrainNetworkCommands(CLI::App& app) {
       ->capture_default_str();
   counter->add_option("--input", c->options.input_size, "Input side in pixels (paper: 224)")->capture_default_str();
   counter->add_option("--lr", c->options.learning_rate, "Adam learning rate")->capture_default_str();
-  counter->add_option("--val-fraction", c->options.validation_fraction, "Fraction of training photos for validation")
+  counter->add_option("--val-fraction", c->options.validation_fraction,
+                      "Fraction of training photos for validation (0: all train, the last epoch is kept)")
       ->capture_default_str();
   counter->add_option("--copy-paste", c->options.copy_paste.probability,
                       "Probability that a drawn 1..6-apple sample is replaced by a composite of real single apples "
@@ -103,6 +104,11 @@ void AddTrainNetworkCommands(CLI::App& app) {
     }
     const nn::CounterTrainingResult result =
         nn::TrainCounter(patches, c->options, Describe(c->data, c->patches, c->subset), c->out);
+    if (result.validation_patches == 0) {
+      spdlog::info("wrote {}: {} training patches, no validation, last epoch {} kept ({:.0f} s)", c->out,
+                   result.train_patches, result.record.epochs_run, result.record.seconds);
+      return;
+    }
     spdlog::info("wrote {}: {} training / {} validation patches, best val accuracy {:.4f} at epoch {} of {} ({:.0f} s)",
                  c->out, result.train_patches, result.validation_patches, result.record.best_metric,
                  result.record.best_epoch, result.record.epochs_run, result.record.seconds);

@@ -112,6 +112,30 @@ TEST(CnnCounter, DensityHeadTrainsOnPointsAndReloads) {
   EXPECT_THROW(options.Check(), Error);
 }
 
+// With no validation photos every patch trains, nothing stops early, and the
+// file holds the last epoch's network.
+TEST(CnnCounter, WithoutValidationEveryPatchTrainsAndTheLastEpochIsKept) {
+  const fs::path dir = TempDir("no_validation");
+  std::mt19937_64 rng(9);
+  std::vector<nn::LabelledPatch> patches;
+  for (int i = 0; i < 60; ++i) patches.push_back({DiscPatch(i % 3, rng), i % 3, "photo" + std::to_string(i % 6), {}, false});
+  nn::CounterTrainingOptions options = TinyCounterOptions(3);
+  options.validation_fraction = 0;
+  options.trainer.patience = 1;
+  const nn::CounterTrainingResult result = TrainCounter(patches, options, {{"source", "test"}}, dir / "counter.pt");
+  EXPECT_EQ(result.train_patches, 60);
+  EXPECT_EQ(result.validation_patches, 0);
+  EXPECT_EQ(result.record.epochs_run, 3);
+  EXPECT_EQ(result.record.best_epoch, 3);
+  EXPECT_TRUE(result.record.validation.empty());
+  EXPECT_EQ(nn::ReadCheckpointHeader(dir / "counter.pt", "counter")["training"]["best_epoch"].get<int>(), 3);
+  EXPECT_EQ(CnnCounter(dir / "counter.pt", 1).CountBatch({patches[0].bgr}).size(), 1u);
+  options.validation_fraction = -0.1;
+  EXPECT_THROW(options.Check(), Error);
+  options.validation_fraction = 1;
+  EXPECT_THROW(options.Check(), Error);
+}
+
 TEST(CnnCounter, FlipAverageIsMirrorInvariant) {
   const fs::path dir = TempDir("flip");
   torch::manual_seed(2);

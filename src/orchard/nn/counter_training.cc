@@ -115,6 +115,7 @@ class CounterTask : public TrainingTask {
   }
   std::string MetricName() const override { return "val_accuracy"; }
   void SaveBest() override { save_best_(); }
+  bool HasValidation() const override { return !val_images_.empty(); }
 
  private:
   ResNet net_;
@@ -197,8 +198,8 @@ void CounterTrainingOptions::Check() const {
   ORCHARD_CHECK_OPTION(balance_power >= 0 && balance_power <= 1, "balance power must be in [0, 1], got ", balance_power);
   ORCHARD_CHECK_OPTION(density_weight >= 0, "density weight must be >= 0, got ", density_weight);
   ORCHARD_CHECK_OPTION(density_sigma > 0, "density sigma must be positive, got ", density_sigma);
-  ORCHARD_CHECK_OPTION(validation_fraction > 0 && validation_fraction < 1, "validation fraction must be in (0, 1), got ",
-                       validation_fraction);
+  ORCHARD_CHECK_OPTION(validation_fraction >= 0 && validation_fraction < 1,
+                       "validation fraction must be in [0, 1), got ", validation_fraction);
 }
 
 CounterTrainingResult TrainCounter(const std::vector<LabelledPatch>& patches, const CounterTrainingOptions& options,
@@ -207,7 +208,9 @@ CounterTrainingResult TrainCounter(const std::vector<LabelledPatch>& patches, co
   if (patches.empty()) Fail("no training patches");
   std::vector<std::string> photo_ids;
   for (const LabelledPatch& p : patches) photo_ids.push_back(p.photo);
-  const std::vector<std::string> chosen = ChooseTestPhotos(photo_ids, options.validation_fraction, options.split_seed);
+  const std::vector<std::string> chosen = options.validation_fraction > 0
+                                              ? ChooseTestPhotos(photo_ids, options.validation_fraction, options.split_seed)
+                                              : std::vector<std::string>{};
   const std::set<std::string> val_photos(chosen.begin(), chosen.end());
 
   CounterTrainingResult result;
@@ -240,7 +243,7 @@ CounterTrainingResult TrainCounter(const std::vector<LabelledPatch>& patches, co
     copy_paste = std::make_unique<CopyPasteSource>(train_originals, train_labels, train_photos, options.copy_paste);
     if (copy_paste->empty()) Fail("copy-paste needs training photos with background and single-apple patches");
   }
-  if (train_images.empty() || val_images.empty()) {
+  if (train_images.empty() || (options.validation_fraction > 0 && val_images.empty())) {
     Fail("training and validation each need patches from at least one photo: give patches from more photos");
   }
   result.train_patches = static_cast<int>(train_images.size());

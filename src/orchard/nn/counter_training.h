@@ -55,7 +55,9 @@ struct CounterTrainingOptions {
   // clusters hold one apple, but count multi-apple clusters too low
   // (models/counter.md, "GPU recipe sweep").
   double balance_power = 1.0;
-  // Fraction of the training photos held out for early stopping.
+  // Fraction of the training photos held out for early stopping. 0 = none:
+  // every training photo trains and the last epoch is kept (for a recipe
+  // whose epoch count was chosen on a run with validation).
   double validation_fraction = 0.2;
   uint64_t split_seed = 1;
   PatchAugmentation augmentation;

@@ -212,15 +212,16 @@ TrainingRecord Train(TrainingTask& task, torch::nn::Module& model, torch::optim:
     model.eval();
     // The average is validated and, when best, saved; training continues from the live weights.
     if (average) average->Swap();
-    double metric;
-    {
+    const bool validates = task.HasValidation();
+    double metric = 0;
+    if (validates) {
       torch::NoGradGuard no_grad;
       metric = task.Validate();
     }
     record.epochs_run = epoch;
     record.train_loss.push_back(loss_sum / std::max<size_t>(1, batches));
-    record.validation.push_back(metric);
-    const bool improved = record.best_epoch == 0 || metric > record.best_metric;
+    if (validates) record.validation.push_back(metric);
+    const bool improved = !validates || record.best_epoch == 0 || metric > record.best_metric;
     if (improved) {
       record.best_metric = metric;
       record.best_epoch = epoch;
@@ -230,8 +231,13 @@ TrainingRecord Train(TrainingTask& task, torch::nn::Module& model, torch::optim:
     if (epoch - record.best_epoch >= options.patience) record.stopped_early = true;
     if (options.progress) {
       if (tty) std::fputc('\r', stderr);
-      std::fprintf(stderr, "epoch %d/%d loss %.4f %s %.4f%s\n", epoch, options.max_epochs, record.train_loss.back(),
-                   task.MetricName().c_str(), metric, improved ? " (best)" : "");
+      if (validates) {
+        std::fprintf(stderr, "epoch %d/%d loss %.4f %s %.4f%s\n", epoch, options.max_epochs, record.train_loss.back(),
+                     task.MetricName().c_str(), metric, improved ? " (best)" : "");
+      } else {
+        std::fprintf(stderr, "epoch %d/%d loss %.4f (no validation: this epoch kept)\n", epoch, options.max_epochs,
+                     record.train_loss.back());
+      }
     }
     record.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (!options.state_dir.empty()) SaveState(options.state_dir, model, optimizer, record, rng, average.get());

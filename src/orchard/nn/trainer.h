@@ -55,6 +55,9 @@ class TrainingTask {
   virtual std::string MetricName() const = 0;
   // Called when the validation metric improves: keep this model.
   virtual void SaveBest() = 0;
+  // False when every sample trains (no held-out set): the trainer then keeps
+  // each epoch's model in turn (the last is saved), without early stopping.
+  virtual bool HasValidation() const { return true; }
 };
 
 struct TrainingRecord {
@@ -64,7 +67,7 @@ struct TrainingRecord {
   bool stopped_early = false;
   double seconds = 0;  // wall time of this run (not counting earlier resumed runs)
   std::vector<double> train_loss;  // mean per epoch
-  std::vector<double> validation;  // metric per epoch
+  std::vector<double> validation;  // metric per epoch (empty without validation)
 
   nlohmann::json ToJson() const;
   static TrainingRecord FromJson(const nlohmann::json& json);
