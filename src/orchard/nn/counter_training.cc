@@ -208,9 +208,8 @@ CounterTrainingResult TrainCounter(const std::vector<LabelledPatch>& patches, co
   if (patches.empty()) Fail("no training patches");
   std::vector<std::string> photo_ids;
   for (const LabelledPatch& p : patches) photo_ids.push_back(p.photo);
-  const std::vector<std::string> chosen = options.validation_fraction > 0
-                                              ? ChooseTestPhotos(photo_ids, options.validation_fraction, options.split_seed)
-                                              : std::vector<std::string>{};
+  // A fraction of 0 chooses no photo: every patch trains.
+  const std::vector<std::string> chosen = ChooseTestPhotos(photo_ids, options.validation_fraction, options.split_seed);
   const std::set<std::string> val_photos(chosen.begin(), chosen.end());
 
   CounterTrainingResult result;
