@@ -35,6 +35,8 @@ void AddSideOptions(CLI::App* cmd, SideOptions* options) {
       ->capture_default_str();
   cmd->add_option("--support-window", o.clusters.points.support_window, "Frames either side checked for support")
       ->capture_default_str();
+  cmd->add_flag("--split-blobs,!--no-split-blobs", o.split_counted_blobs,
+               "Split blobs counted as several apples into one piece per apple before triangulating (default)");
   cmd->add_flag("--fit-circles,!--no-fit-circles", o.fit_apple_circles,
                "Triangulate circles fitted to the blobs' outlines (default) or the blob centroids");
   cmd->add_option("--centre-fraction", o.clusters.points.centre_fraction,

@@ -49,7 +49,11 @@ void AddYieldCommand(CLI::App& app) {
                   "Matched features between a front and a back frame above which they show the same face")
       ->capture_default_str();
   cmd->add_option("--intersection-distance", o.shared.intersection_distance,
-                  "Fruit points of the two sides closer than this (m) are the same apple (shared count)")
+                  "Fruit points of the two sides closer than this (m) are the same apple (shared count); the floor "
+                  "when --intersection-per-residual is set")
+      ->capture_default_str();
+  cmd->add_option("--intersection-per-residual", o.intersection_per_residual,
+                  "Widen the intersection distance to this many times the registration's residual (0 = fixed)")
       ->capture_default_str();
   cmd->add_option("--bin-length", o.bin_length, "Length of the yield map's bins along the row (m)")
       ->capture_default_str();

@@ -113,6 +113,76 @@ void FitAppleCentres(FruitFrame* frame) {
   for (const Blob& b : frame->blobs) frame->apple_centres.push_back(FitAppleCentre(frame->labels, b));
 }
 
+void SplitCountedBlobs(FruitFrame* frame) {
+  const size_t n = frame->blobs.size();
+  if (frame->counts.size() != n) Fail("split blobs: ", frame->counts.size(), " counts for ", n, " blobs");
+  for (size_t i = 0; i < n; ++i) {
+    const int k = frame->counts[i];
+    const Blob blob = frame->blobs[i];
+    if (k < 2 || blob.pixels < 2 * k) continue;
+    const cv::Rect box(static_cast<int>(blob.box.x1), static_cast<int>(blob.box.y1),
+                       static_cast<int>(blob.box.x2 - blob.box.x1), static_cast<int>(blob.box.y2 - blob.box.y1));
+    const bool wide = box.width >= box.height;
+    std::vector<cv::Point> pixels;
+    cv::Mat1f samples(blob.pixels, 2);
+    cv::Mat1i labels(blob.pixels, 1);
+    for (int y = box.y; y < box.y + box.height; ++y)
+      for (int x = box.x; x < box.x + box.width; ++x)
+        if (frame->labels(y, x) == blob.id) {
+          const int r = static_cast<int>(pixels.size());
+          samples(r, 0) = static_cast<float>(x), samples(r, 1) = static_cast<float>(y);
+          // Slabs of equal width along the longer side start the k-means.
+          const double t = wide ? (x - box.x + 0.5) / box.width : (y - box.y + 0.5) / box.height;
+          labels(r, 0) = std::min(k - 1, static_cast<int>(t * k));
+          pixels.emplace_back(x, y);
+        }
+    if (static_cast<int>(pixels.size()) != blob.pixels) Fail("split blobs: blob ", blob.id, " has ", pixels.size(),
+                                                            " pixels, its record ", blob.pixels);
+    cv::Mat centres;
+    cv::kmeans(samples, k, labels, cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 20, 0.5), 1,
+               cv::KMEANS_USE_INITIAL_LABELS, centres);
+    // Piece 0 keeps the blob's id; the others become new blobs.
+    std::vector<int> id_of(k);
+    for (int j = 0; j < k; ++j) id_of[j] = j == 0 ? blob.id : static_cast<int>(frame->blobs.size()) + j;
+    std::vector<Blob> pieces(k);
+    std::vector<double> sx(k, 0), sy(k, 0);
+    for (int j = 0; j < k; ++j) {
+      pieces[j].id = id_of[j], pieces[j].score = blob.score;
+      pieces[j].box = Box{1e9, 1e9, -1e9, -1e9};
+    }
+    for (size_t r = 0; r < pixels.size(); ++r) {
+      const int j = labels(static_cast<int>(r), 0);
+      const cv::Point p = pixels[r];
+      frame->labels(p.y, p.x) = id_of[j];
+      Blob& b = pieces[j];
+      ++b.pixels, sx[j] += p.x, sy[j] += p.y;
+      b.box.x1 = std::min(b.box.x1, static_cast<double>(p.x)), b.box.y1 = std::min(b.box.y1, static_cast<double>(p.y));
+      b.box.x2 = std::max(b.box.x2, p.x + 1.0), b.box.y2 = std::max(b.box.y2, p.y + 1.0);
+    }
+    // k-means can empty a piece; such a piece is left with no pixels and no apple.
+    int kept = 0;
+    for (int j = 0; j < k; ++j) kept += pieces[j].pixels > 0;
+    for (int j = 0; j < k; ++j) {
+      Blob& b = pieces[j];
+      if (b.pixels > 0) b.centroid = {sx[j] / b.pixels, sy[j] / b.pixels};
+      else b.box = blob.box, b.centroid = blob.centroid;
+      const int count = b.pixels > 0 ? 1 : 0;
+      if (j == 0) {
+        frame->blobs[i] = b, frame->counts[i] = count;
+      } else {
+        frame->blobs.push_back(b), frame->counts.push_back(count);
+      }
+    }
+    // Pieces that k-means emptied give their apples to the first piece with pixels.
+    for (int j = 0; j < k && kept < k; ++j)
+      if (pieces[j].pixels > 0) {
+        const size_t at = j == 0 ? i : static_cast<size_t>(id_of[j] - 1);
+        frame->counts[at] += k - kept;
+        break;
+      }
+  }
+}
+
 BlobCentres::BlobCentres(const FruitFrame& frame, int cell_pixels) : frame_(&frame), cell_(cell_pixels) {
   cols_ = frame.labels.cols / cell_ + 1, rows_ = frame.labels.rows / cell_ + 1;
   grid_.resize(static_cast<size_t>(cols_) * rows_);

@@ -74,6 +74,16 @@ cv::Point2d FitAppleCentre(const cv::Mat1i& labels, const Blob& blob);
 // Fills frame->apple_centres with FitAppleCentre for every blob.
 void FitAppleCentres(FruitFrame* frame);
 
+// Splits every blob counted as k >= 2 apples into k pieces (k-means on its
+// pixel positions, started from k slabs along its longer side, so the result
+// is deterministic), each counted as one apple; the frame's apple count is
+// unchanged. A detector's blob of several touching apples gives one centre,
+// hence one fruit point for all of them; its pieces give one each, so the
+// apples are located, and the two sides' clusters of the same apples can meet
+// in the merge. New pieces take ids after the frame's last blob. Call before
+// FitAppleCentres.
+void SplitCountedBlobs(FruitFrame* frame);
+
 struct FruitPoint {
   Eigen::Vector3d xyz = Eigen::Vector3d::Zero();
   int frame = 0;    // index of the frame of the blob it came from

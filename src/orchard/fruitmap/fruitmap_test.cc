@@ -149,6 +149,117 @@ TEST(CountFruitClusters, CountsEachBallOnceAndRemovesFallenAndNextRow) {
   EXPECT_GT(r.single_frame_sum, 3 * r.count);
 }
 
+// The frame's blobs joined into one blob counted as all of them: a
+// detector's blob of touching apples, counted by a counter.
+FruitFrame JoinBlobs(const FruitFrame& f) {
+  FruitFrame joined;
+  joined.labels = cv::Mat1i::zeros(f.labels.size());
+  const cv::Mat1b fruit = f.labels > 0;
+  if (cv::countNonZero(fruit) == 0) return joined;
+  joined.labels.setTo(1, fruit);
+  Blob b;
+  b.id = 1;
+  b.pixels = cv::countNonZero(fruit);
+  const cv::Rect box = cv::boundingRect(fruit);
+  b.box = Box{static_cast<double>(box.x), static_cast<double>(box.y), static_cast<double>(box.x + box.width),
+              static_cast<double>(box.y + box.height)};
+  const cv::Moments m = cv::moments(fruit, true);
+  b.centroid = {m.m10 / m.m00, m.m01 / m.m00};
+  joined.blobs = {b};
+  joined.counts = {static_cast<int>(f.blobs.size())};
+  return joined;
+}
+
+TEST(SplitCountedBlobs, OnePiecePerCountedAppleAtItsDisc) {
+  const CameraView v = ViewAt(0);
+  // Two touching apples (8 cm apart, radius 4 cm) 2.5 m away: one blob counted 2.
+  const std::vector<Eigen::Vector3d> pair = {{-0.04, 0, 1.5}, {0.04, 0, 1.5}};
+  FruitFrame frame = JoinBlobs(RenderBalls({v}, pair, 0.04)[0]);
+  ASSERT_EQ(frame.blobs.size(), 1u);
+  // A lone apple elsewhere, counted 1, and a speck counted 0 stay as they are.
+  const FruitFrame lone = RenderBalls({v}, {{0.5, 0, 1.2}, {-0.5, 0, 1.8}}, 0.04)[0];
+  for (int i = 0; i < 2; ++i) {
+    Blob b = lone.blobs[i];
+    b.id = static_cast<int>(frame.blobs.size()) + 1;
+    frame.labels.setTo(b.id, lone.labels == i + 1);
+    frame.blobs.push_back(b);
+    frame.counts.push_back(1 - i);
+  }
+  FruitFrame before = frame;
+  before.labels = frame.labels.clone();
+  SplitCountedBlobs(&frame);
+  ASSERT_EQ(frame.blobs.size(), 4u);
+  EXPECT_EQ(frame.counts, (std::vector<int>{1, 1, 0, 1}));
+  EXPECT_EQ(frame.blobs[1].pixels, before.blobs[1].pixels);
+  EXPECT_EQ(cv::countNonZero(frame.labels == 2), before.blobs[1].pixels);
+  for (const Blob& b : frame.blobs) EXPECT_EQ(cv::countNonZero(frame.labels == b.id), b.pixels) << b.id;
+  EXPECT_EQ(frame.blobs[0].pixels + frame.blobs[3].pixels, before.blobs[0].pixels);
+  // Each piece's centroid lies near its apple's projected centre (the apples
+  // are 16 px apart in the image, 8 px radius).
+  for (const auto& X : pair) {
+    Eigen::Vector2d p;
+    ASSERT_TRUE(v.Project(X, &p));
+    double nearest = 1e9;
+    for (int id : {1, 4}) {
+      const cv::Point2d c = frame.blobs[id - 1].centroid;
+      nearest = std::min(nearest, std::hypot(c.x + 0.5 - p.x(), c.y + 0.5 - p.y()));
+    }
+    EXPECT_LT(nearest, 3.0);
+  }
+  // The same input splits the same way.
+  FruitFrame again = before;
+  again.labels = before.labels.clone();
+  SplitCountedBlobs(&again);
+  EXPECT_EQ(cv::countNonZero(again.labels != frame.labels), 0);
+}
+
+TEST(CountFruitClusters, TouchingApplesInOneBlobAreLocatedWhenTheBlobIsSplit) {
+  std::vector<CameraView> views;
+  for (int i = 0; i < 16; ++i) views.push_back(ViewAt(-0.5 + 0.1 * i));
+  // Two pairs of touching apples, each pair one blob counted 2 in every frame.
+  const std::vector<std::vector<Eigen::Vector3d>> pairs = {{{-0.24, 0, 1.2}, {-0.16, 0, 1.2}},
+                                                           {{0.36, -0.1, 1.6}, {0.42, -0.1, 1.65}}};
+  std::vector<FruitFrame> frames(views.size());
+  for (size_t f = 0; f < views.size(); ++f) {
+    frames[f].labels = cv::Mat1i::zeros(views[f].height, views[f].width);
+    for (const auto& pair : pairs) {
+      FruitFrame one = JoinBlobs(RenderBalls({views[f]}, pair, 0.04)[0]);
+      if (one.blobs.empty()) continue;
+      Blob b = one.blobs[0];
+      b.id = static_cast<int>(frames[f].blobs.size()) + 1;
+      frames[f].labels.setTo(b.id, one.labels == 1);
+      frames[f].blobs.push_back(b);
+      frames[f].counts.push_back(2);
+    }
+  }
+  Plane ground;  // z = 0
+  ClusterOptions o;
+  o.link_distance = 0.05;  // touching apples' centres are 6-8 cm apart
+  std::vector<FruitFrame> split = frames;
+  for (auto& f : split) {
+    f.labels = f.labels.clone();  // cv::Mat copies share their pixels
+    SplitCountedBlobs(&f);
+  }
+  const auto near_apples = [&](const ClusterResult& r) {
+    int located = 0;
+    for (const auto& pair : pairs)
+      for (const auto& X : pair) {
+        bool near = false;
+        for (const auto& p : r.points) near = near || (p.xyz - X).norm() < 0.025;
+        located += near;
+      }
+    return located;
+  };
+  const ClusterResult whole = CountFruitClusters(views, frames, ground, o);
+  const ClusterResult pieces = CountFruitClusters(views, split, ground, o);
+  // Whole blobs give points between the apples of a pair; pieces give a point
+  // at every apple, and the count is the same four.
+  EXPECT_EQ(near_apples(whole), 0);
+  EXPECT_EQ(near_apples(pieces), 4);
+  EXPECT_EQ(pieces.count, 4);
+  EXPECT_EQ(pieces.single_frame_sum, whole.single_frame_sum);
+}
+
 TEST(BlobNearPoint, ASmallPieceOfAHiddenAppleSupportsItsCentre) {
   const CameraView v = ViewAt(0);
   const Eigen::Vector3d X(0.1, 0, 1.5);  // 2.5 m away: a 3 cm apple is 6 px, 70% of it 4.2 px

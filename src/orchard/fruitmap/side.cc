@@ -524,6 +524,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   for (const auto& v : views) {
     image_paths.push_back(image_dir / v.name);
     frames.push_back(FrameFruit(in, image_paths.back(), in.out / "detections"));
+    if (o.split_counted_blobs) SplitCountedBlobs(&frames.back());
     if (o.fit_apple_circles) FitAppleCentres(&frames.back());
     if (frames.back().labels.cols != v.width || frames.back().labels.rows != v.height)
       Fail("frame ", v.name, " is ", frames.back().labels.cols, "x", frames.back().labels.rows, ", its camera ",

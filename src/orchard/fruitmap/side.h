@@ -143,6 +143,11 @@ struct SideOptions {
   // outline is not (exact masks, true poses: clusters holding no apple 717 ->
   // 526 on 44 sides; docs/side.md).
   bool fit_apple_circles = true;
+  // Split each blob the counter counts as k >= 2 apples into k pieces of one
+  // apple each (SplitCountedBlobs) before the 3D stage, so that every apple
+  // of a detector's merged blob gets a fruit point (exact instance masks have
+  // no such blobs).
+  bool split_counted_blobs = true;
   // Camera height above the ground (m), which fixes the scale of a COLMAP
   // reconstruction (the synthetic rows film from 1.5 m).
   double camera_height = 1.5;

@@ -13,6 +13,7 @@
 #include "orchard/merge/row_registration.h"
 #include "orchard/merge/shared_count.h"
 #include "orchard/merge/side_cloud.h"
+#include "orchard/merge/yield.h"
 
 namespace orchard {
 namespace {
@@ -356,6 +357,25 @@ TEST(SharedCountTest, LinkedClustersShareTheSmallerSidesApples) {
   const std::vector<SideCluster> apart = {Cluster(1, 1, {a + Eigen::Vector3d(0.12, 0, 0)})};
   EXPECT_EQ(CountSharedApples(front, apart, SharedCountOptions()).total, 2);
   EXPECT_THROW(CountSharedApples(front, back, SharedCountOptions{-1}), Error);
+}
+
+TEST(SharedCountTest, TheIntersectionDistanceGrowsWithTheRegistrationResidual) {
+  YieldOptions o;
+  Registration r;
+  r.matched = 40;
+  r.residual = 0.03;  // exact masks: 2.6-3.3 cm; 2.5 x 3 cm stays below the 8 cm floor
+  EXPECT_DOUBLE_EQ(IntersectionDistance(o, r), 0.08);
+  r.residual = 0.05;  // a detector's noisier fruit points
+  EXPECT_DOUBLE_EQ(IntersectionDistance(o, r), 0.125);
+  // Too few matched clusters to measure a residual: the floor.
+  r.matched = o.registration.min_matched - 1;
+  EXPECT_DOUBLE_EQ(IntersectionDistance(o, r), 0.08);
+  // 0 turns the widening off.
+  r.matched = 40;
+  o.intersection_per_residual = 0;
+  EXPECT_DOUBLE_EQ(IntersectionDistance(o, r), 0.08);
+  o.intersection_per_residual = -1;
+  EXPECT_THROW(o.Check(), Error);
 }
 
 TEST(SideCloudTest, MissingSideOutputsAreAClearError) {

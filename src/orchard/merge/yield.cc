@@ -25,8 +25,15 @@ void YieldOptions::Check() const {
   row.Check();
   faces.Check();
   shared.Check();
+  ORCHARD_CHECK_OPTION(intersection_per_residual >= 0, "intersection per residual must be >= 0, got ",
+                       intersection_per_residual);
   ORCHARD_CHECK_OPTION(bin_length > 0, "bin length must be positive, got ", bin_length);
   ORCHARD_CHECK_OPTION(report_frames >= 0, "report frames must be >= 0, got ", report_frames);
+}
+
+double IntersectionDistance(const YieldOptions& o, const Registration& registration) {
+  if (registration.matched < o.registration.min_matched) return o.shared.intersection_distance;
+  return std::max(o.shared.intersection_distance, o.intersection_per_residual * registration.residual);
 }
 
 namespace {
@@ -199,7 +206,9 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
     for (auto& p : c.points) p = y.registration.back_to_front * p;
     UpdateClusterExtent(&c);
   }
-  const SharedCount shared = CountSharedApples(front_cloud.clusters, back_in_front, o.shared);
+  SharedCountOptions shared_options = o.shared;
+  shared_options.intersection_distance = IntersectionDistance(o, y.registration);
+  const SharedCount shared = CountSharedApples(front_cloud.clusters, back_in_front, shared_options);
   y.merge_front = shared.front, y.merge_back = shared.back, y.merge_shared = shared.shared, y.total = shared.total;
   y.front = y.front_side.one_side_count, y.back = y.back_side.one_side_count;
   y.sum_of_sides = y.front + y.back;
@@ -275,7 +284,9 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
       {"link_distance_m", o.side.clusters.link_distance},
       {"match_distance_m", o.registration.match_distance},
       {"row_registration", o.row_registration},
-      {"intersection_distance_m", o.shared.intersection_distance},
+      {"intersection_distance_m", shared_options.intersection_distance},
+      {"intersection_floor_m", o.shared.intersection_distance},
+      {"intersection_per_residual", o.intersection_per_residual},
   };
   if (!in.truth.empty()) {
     const Json t = Json::parse(ReadTextFile(in.truth), nullptr, false);

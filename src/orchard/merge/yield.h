@@ -41,6 +41,15 @@ struct YieldOptions {
   bool face_check = true;
   FaceCheckOptions faces;
   SharedCountOptions shared;
+  // The shared count's intersection distance grows with the reconstruction's
+  // error: at least this many times the registration's residual (the RMS
+  // distance of the matched cluster centres), when it matched enough clusters
+  // to measure one; shared.intersection_distance stays the floor (0 = always
+  // the floor). Exact masks leave 2.6-3.3 cm, and the floor of 8 cm was
+  // chosen on them; the U-Net's noisier fruit points leave 4.3-5.3 cm, and
+  // with 8 cm the merge found a third of the apples both sides see
+  // (docs/yield.md).
+  double intersection_per_residual = 2.5;
   // Length (m) of the along-row bins of the yield map.
   double bin_length = 1.0;
   // Take the given poses of both sides as one frame (RTK-GNSS, a SLAM run
@@ -51,6 +60,11 @@ struct YieldOptions {
   int report_frames = 2;
   void Check() const;
 };
+
+// The shared count's intersection distance: options.shared's, widened to
+// intersection_per_residual times the registration's residual when the
+// registration matched at least registration.min_matched clusters.
+double IntersectionDistance(const YieldOptions& options, const Registration& registration);
 
 struct YieldInputs {
   SideInputs front, back;  // their `out` is ignored: the sides go to OUT/front and OUT/back
