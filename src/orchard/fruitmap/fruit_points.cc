@@ -124,20 +124,20 @@ void SplitCountedBlobs(FruitFrame* frame) {
                        static_cast<int>(blob.box.x2 - blob.box.x1), static_cast<int>(blob.box.y2 - blob.box.y1));
     const bool wide = box.width >= box.height;
     std::vector<cv::Point> pixels;
-    cv::Mat1f samples(blob.pixels, 2);
-    cv::Mat1i labels(blob.pixels, 1);
     for (int y = box.y; y < box.y + box.height; ++y)
       for (int x = box.x; x < box.x + box.width; ++x)
-        if (frame->labels(y, x) == blob.id) {
-          const int r = static_cast<int>(pixels.size());
-          samples(r, 0) = static_cast<float>(x), samples(r, 1) = static_cast<float>(y);
-          // Slabs of equal width along the longer side start the k-means.
-          const double t = wide ? (x - box.x + 0.5) / box.width : (y - box.y + 0.5) / box.height;
-          labels(r, 0) = std::min(k - 1, static_cast<int>(t * k));
-          pixels.emplace_back(x, y);
-        }
-    if (static_cast<int>(pixels.size()) != blob.pixels) Fail("split blobs: blob ", blob.id, " has ", pixels.size(),
-                                                            " pixels, its record ", blob.pixels);
+        if (frame->labels(y, x) == blob.id) pixels.emplace_back(x, y);
+    if (static_cast<int>(pixels.size()) != blob.pixels)
+      Fail("split blobs: blob ", blob.id, " has ", pixels.size(), " pixels in its box, its record ", blob.pixels);
+    cv::Mat1f samples(blob.pixels, 2);
+    cv::Mat1i labels(blob.pixels, 1);
+    for (int r = 0; r < blob.pixels; ++r) {
+      const cv::Point p = pixels[r];
+      samples(r, 0) = static_cast<float>(p.x), samples(r, 1) = static_cast<float>(p.y);
+      // Slabs of equal width along the longer side start the k-means.
+      const double t = wide ? (p.x - box.x + 0.5) / box.width : (p.y - box.y + 0.5) / box.height;
+      labels(r, 0) = std::min(k - 1, static_cast<int>(t * k));
+    }
     cv::Mat centres;
     cv::kmeans(samples, k, labels, cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 20, 0.5), 1,
                cv::KMEANS_USE_INITIAL_LABELS, centres);
