@@ -75,8 +75,8 @@ cv::Point2d FitAppleCentre(const cv::Mat1i& labels, const Blob& blob);
 void FitAppleCentres(FruitFrame* frame);
 
 // Splits every blob counted as k >= 2 apples into k pieces (k-means on its
-// pixel positions, started from k slabs along its longer side, so the result
-// is deterministic), each counted as one apple; the frame's apple count is
+// pixel positions, started from k slabs along its longer side rather than a
+// random draw), each counted as one apple; the frame's apple count is
 // unchanged. A detector's blob of several touching apples gives one centre,
 // hence one fruit point for all of them; its pieces give one each, so the
 // apples are located, and the two sides' clusters of the same apples can meet

@@ -282,6 +282,7 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
       {"poses_registered", o.poses_registered},
       {"camera_height_m", o.side.camera_height},
       {"link_distance_m", o.side.clusters.link_distance},
+      {"split_counted_blobs", o.side.split_counted_blobs},
       {"match_distance_m", o.registration.match_distance},
       {"row_registration", o.row_registration},
       {"intersection_distance_m", shared_options.intersection_distance},
