@@ -141,45 +141,28 @@ void SplitCountedBlobs(FruitFrame* frame) {
     cv::Mat centres;
     cv::kmeans(samples, k, labels, cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 20, 0.5), 1,
                cv::KMEANS_USE_INITIAL_LABELS, centres);
-    // Piece 0 keeps the blob's id; the others become new blobs.
-    std::vector<int> id_of(k);
-    for (int j = 0; j < k; ++j) id_of[j] = j == 0 ? blob.id : static_cast<int>(frame->blobs.size()) + j;
-    std::vector<Blob> pieces(k);
-    std::vector<double> sx(k, 0), sy(k, 0);
+    std::vector<std::vector<cv::Point>> piece_pixels(k);
+    for (int r = 0; r < blob.pixels; ++r) piece_pixels[labels(r, 0)].push_back(pixels[r]);
+    // OpenCV refills an emptied cluster, so this guard should never keep a blob whole.
+    if (std::any_of(piece_pixels.begin(), piece_pixels.end(), [](const auto& p) { return p.empty(); })) continue;
+    // Piece 0 keeps the blob's id and place; the others become new blobs.
     for (int j = 0; j < k; ++j) {
-      pieces[j].id = id_of[j], pieces[j].score = blob.score;
-      pieces[j].box = Box{1e9, 1e9, -1e9, -1e9};
-    }
-    for (size_t r = 0; r < pixels.size(); ++r) {
-      const int j = labels(static_cast<int>(r), 0);
-      const cv::Point p = pixels[r];
-      frame->labels(p.y, p.x) = id_of[j];
-      Blob& b = pieces[j];
-      ++b.pixels, sx[j] += p.x, sy[j] += p.y;
-      b.box.x1 = std::min(b.box.x1, static_cast<double>(p.x)), b.box.y1 = std::min(b.box.y1, static_cast<double>(p.y));
-      b.box.x2 = std::max(b.box.x2, p.x + 1.0), b.box.y2 = std::max(b.box.y2, p.y + 1.0);
-    }
-    // k-means can empty a piece; such a piece is left with no pixels and no apple.
-    int kept = 0;
-    for (int j = 0; j < k; ++j) kept += pieces[j].pixels > 0;
-    for (int j = 0; j < k; ++j) {
-      Blob& b = pieces[j];
-      if (b.pixels > 0) b.centroid = {sx[j] / b.pixels, sy[j] / b.pixels};
-      else b.box = blob.box, b.centroid = blob.centroid;
-      const int count = b.pixels > 0 ? 1 : 0;
+      Blob b;
+      b.id = j == 0 ? blob.id : static_cast<int>(frame->blobs.size()) + 1;
+      b.score = blob.score;
+      b.pixels = static_cast<int>(piece_pixels[j].size());
+      const cv::Rect r = cv::boundingRect(piece_pixels[j]);
+      b.box = Box{static_cast<double>(r.x), static_cast<double>(r.y), static_cast<double>(r.x + r.width),
+                  static_cast<double>(r.y + r.height)};
+      double sx = 0, sy = 0;
+      for (const cv::Point& p : piece_pixels[j]) frame->labels(p.y, p.x) = b.id, sx += p.x, sy += p.y;
+      b.centroid = {sx / b.pixels, sy / b.pixels};
       if (j == 0) {
-        frame->blobs[i] = b, frame->counts[i] = count;
+        frame->blobs[i] = b, frame->counts[i] = 1;
       } else {
-        frame->blobs.push_back(b), frame->counts.push_back(count);
+        frame->blobs.push_back(b), frame->counts.push_back(1);
       }
     }
-    // Pieces that k-means emptied give their apples to the first piece with pixels.
-    for (int j = 0; j < k && kept < k; ++j)
-      if (pieces[j].pixels > 0) {
-        const size_t at = j == 0 ? i : static_cast<size_t>(id_of[j] - 1);
-        frame->counts[at] += k - kept;
-        break;
-      }
   }
 }
 
