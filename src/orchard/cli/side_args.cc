@@ -64,6 +64,8 @@ void AddSideOptions(CLI::App* cmd, SideOptions* options) {
       ->capture_default_str();
   cmd->add_option("--assign-near", o.clusters.assign_near, "A point off every blob votes for the blob whose centre is near")
       ->capture_default_str();
+  cmd->add_flag("--vote-near-first,!--vote-under-first", o.clusters.vote_near_first,
+                "A point votes for the blob whose centre is near before the blob under it (default), or the reverse");
   cmd->add_option("--fallen-height", o.clusters.fallen_height, "Clusters lower than this (m) are fallen apples")
       ->capture_default_str();
   cmd->add_option("--row-distance", o.clusters.row_distance, "Camera path to row centre (m), 0 = estimate")

@@ -372,6 +372,37 @@ TEST(CountFruitClusters, FindsAnAppleSeenOnlyThroughGapsInTheLeaves) {
   EXPECT_EQ(r.count, 1);
 }
 
+TEST(CountFruitClusters, AnAppleWhoseCentreTheAppleInFrontHidesIsCounted) {
+  std::vector<CameraView> views;
+  for (int i = 0; i < 11; ++i) views.push_back(ViewAt(-1.0 + 0.1 * i));
+  // An apple and one behind it, 4 cm to the right and 6 cm farther: in every
+  // frame the front apple covers the back one's centre, and the back one
+  // shows as a crescent beside it.
+  const Eigen::Vector3d front(0, 0, 1.5), back(0.04, 0.06, 1.5);
+  std::vector<FruitFrame> frames = RenderBalls(views, {back, front}, 0.04);  // drawn back to front
+  for (auto& f : frames) {
+    for (auto& b : f.blobs) b = BlobOf(f.labels, b.id);  // what shows of each
+    FitAppleCentres(&f);
+  }
+  Plane ground;  // z = 0
+  ClusterOptions o;
+  o.link_distance = 0.08;  // the two apples form one cluster
+  const auto kept = [](const ClusterResult& r) {
+    int n = 0;
+    for (const auto& c : r.clusters) n += c.status == "kept";
+    return n;
+  };
+  ClusterResult r = CountFruitClusters(views, frames, ground, o);
+  EXPECT_EQ(kept(r), 1);
+  EXPECT_EQ(r.count, 2);
+  // Voting for the blob under a point first, the back apple's points vote
+  // for the front apple's blob and its own crescent goes uncounted.
+  o.vote_near_first = false;
+  r = CountFruitClusters(views, frames, ground, o);
+  EXPECT_EQ(kept(r), 1);
+  EXPECT_EQ(r.count, 1);
+}
+
 TEST(EvidenceStatus, FewViewsAndGhostsAreRemoved) {
   ClusterOptions o;
   FruitCluster c;

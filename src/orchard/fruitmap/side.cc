@@ -130,8 +130,8 @@ ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std
   int k = 0;
   r.point_cluster = ConnectedComponents3D(xyz, o.link_distance, &k);
   // Point-on-blob votes of every frame: blob -> component -> points. A point
-  // votes for the blob under it, else for a blob whose centre it is near: a
-  // partly hidden apple's visible piece is small and off its centre.
+  // votes for the blob whose centre it is near, else for the blob under it
+  // (ClusterOptions::vote_near_first).
   const int n = static_cast<int>(frames.size());
   std::vector<BlobVotes> votes(n);
   for (int f = 0; f < n; ++f) {
@@ -139,8 +139,14 @@ ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std
     for (size_t i = 0; i < xyz.size(); ++i) {
       Eigen::Vector2d p;
       if (views[f].Depth(xyz[i]) < o.points.min_depth || !views[f].Project(xyz[i], &p)) continue;
-      int id = frames[f].labels(static_cast<int>(p.y()), static_cast<int>(p.x()));
-      if (id <= 0 && o.assign_near) id = centres.Near(views[f], xyz[i], o.points);
+      const int under = frames[f].labels(static_cast<int>(p.y()), static_cast<int>(p.x()));
+      int id = under;
+      if (o.vote_near_first) {
+        id = centres.Near(views[f], xyz[i], o.points);
+        if (id <= 0) id = under;
+      } else if (id <= 0 && o.assign_near) {
+        id = centres.Near(views[f], xyz[i], o.points);
+      }
       if (id > 0) ++votes[f][id][r.point_cluster[i]];
     }
   }

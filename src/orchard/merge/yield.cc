@@ -283,6 +283,7 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
       {"camera_height_m", o.side.camera_height},
       {"link_distance_m", o.side.clusters.link_distance},
       {"split_counted_blobs", o.side.split_counted_blobs},
+      {"vote_near_first", o.side.clusters.vote_near_first},
       {"match_distance_m", o.registration.match_distance},
       {"row_registration", o.row_registration},
       {"intersection_distance_m", shared_options.intersection_distance},
