@@ -19,6 +19,7 @@ void AddDetectCommand(CLI::App& app);   // orchard detect: fruit masks, blobs, d
 void AddCountCommand(CLI::App& app);    // orchard count: apples per blob
 void AddSideCommand(CLI::App& app);     // orchard side: one side of a row in 3D, tracked count
 void AddYieldCommand(CLI::App& app);    // orchard yield: both sides merged, the row's count and report
+void AddCalibrateCommand(CLI::App& app);  // orchard calibrate: counted -> harvested factor from harvested rows
 void AddTrainNetworkCommands(CLI::App& app);  // orchard train counter|unet (needs AddTrainCommand first)
 void AddPatchesCommand(CLI::App& app);        // orchard patches: counting patches from box annotations
 void AddSplitCommand(CLI::App& app);          // orchard split: photo-wise train/test lists and image folders

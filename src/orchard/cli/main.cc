@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
   orchard::AddCountCommand(app);
   orchard::AddSideCommand(app);
   orchard::AddYieldCommand(app);
+  orchard::AddCalibrateCommand(app);
   orchard::AddTrainNetworkCommands(app);  // after AddTrainCommand: adds to `train`
   orchard::AddPatchesCommand(app);
   orchard::AddSplitCommand(app);

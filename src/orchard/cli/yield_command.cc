@@ -16,7 +16,8 @@ void AddYieldCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "yield", "Count a row's apples from both sides: yield.json, clusters.csv, row.ply, report.html");
   struct Args {
-    std::string front, back, out, poses_front, poses_back, ground_front, ground_back, masks_front, masks_back, truth;
+    std::string front, back, out, poses_front, poses_back, ground_front, ground_back, masks_front, masks_back, truth,
+        calibration;
     FruitArgs fruit;
     YieldOptions options;
   };
@@ -35,6 +36,8 @@ void AddYieldCommand(CLI::App& app) {
   cmd->add_flag("--poses-registered", o.poses_registered,
                 "The given poses of both sides are in one frame (RTK-GNSS, one SLAM run): skip the registration");
   cmd->add_option("--truth", a->truth, "Ground truth json (the generator's truth.json) to compare against");
+  cmd->add_option("--calibration", a->calibration,
+                  "Calibration from harvested rows (orchard calibrate): also report the calibrated total");
   cmd->add_option("--match-distance", o.registration.match_distance,
                   "Clusters of the two sides closer than this (m) can be the same fruit (registration)")
       ->capture_default_str();
@@ -63,6 +66,7 @@ void AddYieldCommand(CLI::App& app) {
     YieldInputs in;
     in.out = a->out;
     in.truth = a->truth;
+    in.calibration = a->calibration;
     in.front.input = a->front, in.back.input = a->back;
     in.front.poses = a->poses_front, in.back.poses = a->poses_back;
     if (!a->ground_front.empty()) in.front.ground = ParseGroundPlane(a->ground_front);
@@ -73,6 +77,9 @@ void AddYieldCommand(CLI::App& app) {
     const YieldSummary y = RunYield(in, a->options);
     std::printf("row: %d apples (front %d, back %d, seen from both sides %.1f; unmerged sum %d) -> %s/yield.json\n",
                 y.total, y.front, y.back, y.shared, y.sum_of_sides, a->out.c_str());
+    if (!in.calibration.empty())
+      std::printf("calibrated: %d apples (x%.3f, %s)\n", y.calibrated_total, y.calibration_factor,
+                  in.calibration.string().c_str());
   });
 }
 

@@ -86,7 +86,9 @@ std::string YieldReportHtml(const nlohmann::json& y, const std::vector<MapCluste
        "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #ccc;padding:4px 10px;text-align:right}"
        "th{background:#eee}td:first-child{text-align:left}img{max-width:440px;margin:4px;border:1px solid #ccc}"
        ".warn{color:#a40}</style></head><body>\n";
-  h << "<h1>Apple yield of the row: " << y.at("total").get<int>() << " apples</h1>\n";
+  h << "<h1>Apple yield of the row: " << y.at("total").get<int>() << " apples";
+  if (y.contains("calibrated")) h << " seen, " << y.at("calibrated").at("total").get<int>() << " calibrated";
+  h << "</h1>\n";
   h << "<p>Two videos, one from each side of the row, each reconstructed in 3D; fruit clusters counted once per side "
        "from their best views; the sides aligned on the ground plane and their shared fruit; apples seen from both "
        "sides counted once (inclusion-exclusion).</p>\n";
@@ -102,6 +104,14 @@ std::string YieldReportHtml(const nlohmann::json& y, const std::vector<MapCluste
     h << "</tr>\n";
   };
   row("estimate (both sides merged)", y.at("total").get<double>());
+  if (y.contains("calibrated")) {
+    const auto& c = y.at("calibrated");
+    std::string name = "calibrated on " + std::to_string(c.at("runs").get<int>()) + " harvested rows (x" +
+                       Num(c.at("factor").get<double>(), 3) + ")";
+    if (c.contains("leave_one_out_mean_absolute_error_percent"))
+      name += ", expected error " + Num(c.at("leave_one_out_mean_absolute_error_percent").get<double>(), 1) + "%";
+    row(name, c.at("total").get<double>());
+  }
   row("front side", y.at("front").get<double>());
   row("back side", y.at("back").get<double>());
   row("sum of the sides, not merged", y.at("sum_of_sides").get<double>());

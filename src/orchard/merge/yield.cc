@@ -12,6 +12,7 @@
 #include "orchard/core/file_io.h"
 #include "orchard/core/frame_source.h"
 #include "orchard/core/stopwatch.h"
+#include "orchard/merge/calibration.h"
 #include "orchard/merge/report.h"
 #include "orchard/merge/side_cloud.h"
 
@@ -90,6 +91,16 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
   if (o.poses_registered && (in.front.poses.empty() || in.back.poses.empty()))
     Fail("--poses-registered needs given poses for both sides (--poses-front and --poses-back)");
   if (!in.truth.empty() && !fs::is_regular_file(in.truth)) Fail("truth file ", in.truth.string(), " does not exist");
+  // Checked before the long run: a calibration holds only for its detector and counter.
+  Calibration calibration;
+  if (!in.calibration.empty()) {
+    calibration = ReadCalibration(in.calibration);
+    if (MethodKey(calibration.detector) != MethodKey(in.front.detector_name) ||
+        MethodKey(calibration.counter) != MethodKey(in.front.counter_name))
+      Fail("calibration ", in.calibration.string(), " was made with detector '", calibration.detector,
+           "' and counter '", calibration.counter, "', this run uses '", in.front.detector_name, "' and '",
+           in.front.counter_name, "'");
+  }
   fs::create_directories(in.out);
   Stopwatch stopwatch;
   Json timings = Json::object();
@@ -290,6 +301,16 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
       {"intersection_floor_m", o.shared.intersection_distance},
       {"intersection_per_residual", o.intersection_per_residual},
   };
+  if (!in.calibration.empty()) {
+    y.calibration_factor = calibration.factor;
+    y.calibrated_total = static_cast<int>(std::lround(y.total * calibration.factor));
+    j["calibrated"] = {{"total", y.calibrated_total},
+                       {"factor", calibration.factor},
+                       {"file", in.calibration.string()},
+                       {"runs", calibration.runs.size()}};
+    if (!calibration.loo_error_percent.empty())
+      j["calibrated"]["leave_one_out_mean_absolute_error_percent"] = calibration.loo_mean_absolute_error_percent;
+  }
   if (!in.truth.empty()) {
     const Json t = Json::parse(ReadTextFile(in.truth), nullptr, false);
     if (t.is_discarded() || !t.contains("harvested")) Fail("truth file ", in.truth.string(), " has no \"harvested\" count");
@@ -298,6 +319,8 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
       if (t.contains(k)) truth[k] = t.at(k);
     const double harvested = t.at("harvested").get<double>(), visible = t.value("visible_any", 0.0);
     if (harvested > 0) truth["total_percent_of_harvested"] = 100.0 * y.total / harvested;
+    if (harvested > 0 && !in.calibration.empty())
+      truth["calibrated_percent_of_harvested"] = 100.0 * y.calibrated_total / harvested;
     if (visible > 0) {
       truth["total_percent_of_visible_any"] = 100.0 * y.total / visible;
       truth["sum_of_sides_percent_of_visible_any"] = 100.0 * y.sum_of_sides / visible;

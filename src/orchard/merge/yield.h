@@ -72,6 +72,10 @@ struct YieldInputs {
   // Optional ground truth (the generator's truth.json): compared in
   // yield.json and the report.
   fs::path truth;
+  // Optional calibration against harvested rows (`orchard calibrate`,
+  // calibration.h): yield.json and the report add the calibrated total. Its
+  // detector and counter must be this run's.
+  fs::path calibration;
 };
 
 struct YieldSummary {
@@ -89,6 +93,9 @@ struct YieldSummary {
   double merge_shared = 0;
   SideSummary front_side, back_side;
   Registration registration;
+  // With a calibration: total x its factor, rounded (0 without one).
+  int calibrated_total = 0;
+  double calibration_factor = 0;
 };
 
 // Runs both sides (resuming from their caches), registers and merges them,

@@ -8,6 +8,7 @@
 #include "orchard/core/error.h"
 #include "orchard/core/file_io.h"
 #include "orchard/core/test_util.h"
+#include "orchard/merge/calibration.h"
 #include "orchard/merge/yield.h"
 #include "orchard/synth/synth.h"
 
@@ -106,6 +107,33 @@ TEST_F(YieldTest, MergesBothSidesAndResumes) {
   EXPECT_EQ(again.back, y.back);
   EXPECT_EQ(fs::last_write_time(front_cache), front_time);  // not redone
   EXPECT_TRUE(fs::exists(*dir_ / "out/yield.json"));
+
+  // Calibrated on its own harvest, the row's total becomes the harvested
+  // count; a calibration of another detector is refused before the run and
+  // leaves the results alone.
+  const double harvested = truth.at("harvested").get<double>();
+  Calibration calibration = Calibrate({ReadCalibrationRun(*dir_ / "out", harvested)});
+  WriteTextFileAtomic(*dir_ / "calibration.json", CalibrationJson(calibration));
+  YieldInputs in = Inputs("row", "row", "out");
+  in.calibration = *dir_ / "calibration.json";
+  const YieldSummary calibrated = RunYield(in, o);
+  EXPECT_EQ(calibrated.total, y.total);
+  EXPECT_NEAR(calibrated.calibrated_total, harvested, 0.5);
+  const auto jc = nlohmann::json::parse(ReadTextFile(*dir_ / "out/yield.json"));
+  EXPECT_EQ(jc.at("calibrated").at("total").get<int>(), calibrated.calibrated_total);
+  EXPECT_NEAR(jc.at("truth").at("calibrated_percent_of_harvested").get<double>(), 100.0, 0.5);
+  EXPECT_NE(ReadTextFile(*dir_ / "out/report.html").find("calibrated on 1 harvested rows"), std::string::npos);
+  calibration.detector = "unet:models/unet.pt@0123";
+  WriteTextFileAtomic(*dir_ / "other.json", CalibrationJson(calibration));
+  in.calibration = *dir_ / "other.json";
+  const auto written = fs::last_write_time(*dir_ / "out/yield.json");
+  try {
+    RunYield(in, o);
+    FAIL() << "applied another detector's calibration";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("detector"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(fs::last_write_time(*dir_ / "out/yield.json"), written);
 }
 
 TEST_F(YieldTest, SidesOfDifferentRowsFailClearly) {
