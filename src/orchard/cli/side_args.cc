@@ -1,5 +1,7 @@
 #include "orchard/cli/side_args.h"
 
+#include <map>
+
 #include <CLI/CLI.hpp>
 
 #include "orchard/core/error.h"
@@ -64,6 +66,14 @@ void AddSideOptions(CLI::App* cmd, SideOptions* options) {
       ->capture_default_str();
   cmd->add_option("--assign-near", o.clusters.assign_near, "A point off every blob votes for the blob whose centre is near")
       ->capture_default_str();
+  const std::map<std::string, ClusterOptions::BestViews> best_views = {
+      {"auto", ClusterOptions::BestViews::kAuto},
+      {"pixels", ClusterOptions::BestViews::kPixels},
+      {"count", ClusterOptions::BestViews::kCount}};
+  cmd->add_option("--best-views-by", o.clusters.best_views_by,
+                   "Count a cluster in its views with the most fruit pixels (the study's rule) or the highest counts; "
+                   "auto (default): counts for instance masks counted one per blob, else pixels")
+      ->transform(CLI::CheckedTransformer(best_views, CLI::ignore_case));
   cmd->add_flag("--vote-near-first,!--vote-under-first", o.clusters.vote_near_first,
                 "A point votes for the blob whose centre is near before the blob under it (default), or the reverse");
   cmd->add_option("--fallen-height", o.clusters.fallen_height, "Clusters lower than this (m) are fallen apples")

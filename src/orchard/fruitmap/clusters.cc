@@ -50,9 +50,10 @@ std::vector<int> ConnectedComponents3D(const std::vector<Eigen::Vector3d>& point
   return label;
 }
 
-int MedianOfBestViews(std::vector<ClusterView> views, int k, std::vector<int>* chosen) {
+int MedianOfBestViews(std::vector<ClusterView> views, int k, std::vector<int>* chosen, bool by_count) {
   if (k < 1) Fail("best views: k must be at least 1, got ", k);
-  std::stable_sort(views.begin(), views.end(), [](const ClusterView& a, const ClusterView& b) {
+  std::stable_sort(views.begin(), views.end(), [by_count](const ClusterView& a, const ClusterView& b) {
+    if (by_count && a.count != b.count) return a.count > b.count;
     return a.pixels != b.pixels ? a.pixels > b.pixels : a.frame < b.frame;
   });
   if (views.size() > static_cast<size_t>(k)) views.resize(k);

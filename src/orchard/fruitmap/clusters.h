@@ -40,8 +40,11 @@ struct ClusterView {
 };
 
 // The median of the counts of the `k` views with the most pixels (ties:
-// the earlier frame first); with an even number of views, the upper median.
-// `chosen` gets the frames used. 0 when there are no views.
-int MedianOfBestViews(std::vector<ClusterView> views, int k = 3, std::vector<int>* chosen = nullptr);
+// the earlier frame first), or with `by_count` of the `k` views with the
+// highest counts (ties: most pixels, then the earlier frame); with an even
+// number of views, the upper median. `chosen` gets the frames used. 0 when
+// there are no views.
+int MedianOfBestViews(std::vector<ClusterView> views, int k = 3, std::vector<int>* chosen = nullptr,
+                      bool by_count = false);
 
 }  // namespace orchard

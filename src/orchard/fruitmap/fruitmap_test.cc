@@ -4,6 +4,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "orchard/core/error.h"
+#include "orchard/count/counter.h"
 #include "orchard/fruitmap/clusters.h"
 #include "orchard/fruitmap/fruit_points.h"
 #include "orchard/fruitmap/side.h"
@@ -88,6 +89,31 @@ TEST(MedianOfBestViews, UsesTheThreeViewsWithMostPixels) {
   EXPECT_EQ(MedianOfBestViews({{1, 10, 2}, {2, 20, 4}}, 3), 4);  // even: upper median
   EXPECT_EQ(MedianOfBestViews({}, 3), 0);
   EXPECT_THROW(MedianOfBestViews(views, 0), Error);
+  // By count: frames 7 (5), 4 (3), 2 (2); the tie-break is pixels.
+  EXPECT_EQ(MedianOfBestViews(views, 3, &chosen, true), 3);
+  EXPECT_EQ(chosen, (std::vector<int>{7, 4, 2}));
+  EXPECT_EQ(MedianOfBestViews({{1, 10, 2}, {2, 20, 2}, {3, 5, 1}}, 1, &chosen, true), 2);
+  EXPECT_EQ(chosen, (std::vector<int>{2}));
+}
+
+// A counter that reads one apple per blob, as a stand-in for a network.
+class OneEach : public Counter {
+ public:
+  BlobCount Count(const cv::Mat&, const cv::Mat1b&) override { return BlobCount{}; }
+};
+
+TEST(ResolvedBestViews, CountsForInstanceMasksCountedOnePerBlobPixelsOtherwise) {
+  SideInputs masks;  // no detector, no counter
+  ClusterOptions o;
+  EXPECT_EQ(ResolvedBestViews(o, masks), ClusterOptions::BestViews::kCount);
+  OneEach counter;
+  SideInputs counted = masks;
+  counted.counter = &counter;  // masks read by a counter: its counts are estimates
+  EXPECT_EQ(ResolvedBestViews(o, counted), ClusterOptions::BestViews::kPixels);
+  o.best_views_by = ClusterOptions::BestViews::kPixels;
+  EXPECT_EQ(ResolvedBestViews(o, masks), ClusterOptions::BestViews::kPixels);
+  o.best_views_by = ClusterOptions::BestViews::kCount;
+  EXPECT_EQ(ResolvedBestViews(o, counted), ClusterOptions::BestViews::kCount);
 }
 
 // Frames of 3D balls (radius r) rendered as discs into label images.

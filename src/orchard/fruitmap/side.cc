@@ -102,6 +102,12 @@ void ClusterOptions::Check() const {
   ORCHARD_CHECK_OPTION(near_margin > 0, "near margin must be positive, got ", near_margin);
 }
 
+ClusterOptions::BestViews ResolvedBestViews(const ClusterOptions& o, const SideInputs& in) {
+  if (o.best_views_by != ClusterOptions::BestViews::kAuto) return o.best_views_by;
+  // Exact counts per view: instance masks, one apple per blob.
+  return !in.detector && !in.counter ? ClusterOptions::BestViews::kCount : ClusterOptions::BestViews::kPixels;
+}
+
 std::string EvidenceStatus(const FruitCluster& c, const ClusterOptions& o) {
   if (static_cast<int>(c.points.size()) < o.min_points) return "too_few_points";
   if (c.count == 0) return "no_views";
@@ -215,7 +221,8 @@ ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std
   r.row_origin = mean - ground.normal * ground.SignedDistance(mean);
   std::vector<std::pair<double, double>> tree_distances;  // distance, pixels
   for (auto& c : r.clusters) {
-    c.count = MedianOfBestViews(c.views, o.best_views, &c.count_frames);
+    c.count = MedianOfBestViews(c.views, o.best_views, &c.count_frames,
+                                o.best_views_by == ClusterOptions::BestViews::kCount);
     c.height = ground.SignedDistance(c.centre);
     c.distance = across.dot(c.centre - mean);
     c.status = EvidenceStatus(c, o);
@@ -538,9 +545,15 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
     if (frames.size() % 20 == 0) spdlog::info("fruit in {} of {} frames", frames.size(), views.size());
   }
   s.fruit_s = stopwatch.Lap();
-  const ClusterResult r = CountFruitClusters(views, frames, ground, o.clusters);
-  s.one_side_count = o.one_side_clusters ? CountFruitClusters(views, frames, ground, *o.one_side_clusters, r.points).count
-                                         : r.count;
+  const auto resolved = [&in](ClusterOptions c) {
+    c.best_views_by = ResolvedBestViews(c, in);
+    return c;
+  };
+  const ClusterOptions clusters = resolved(o.clusters);
+  const ClusterResult r = CountFruitClusters(views, frames, ground, clusters);
+  s.one_side_count =
+      o.one_side_clusters ? CountFruitClusters(views, frames, ground, resolved(*o.one_side_clusters), r.points).count
+                          : r.count;
   s.clusters_s = stopwatch.Lap();
   WriteOutputs(in.out, image_paths, frames, r, o);
   s.outputs_s = stopwatch.Lap();
@@ -570,6 +583,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
       {"poses", in.poses.empty() ? "colmap" : in.poses.string()},
       {"detector", in.detector_name},
       {"counter", in.counter_name},
+      {"best_views_by", clusters.best_views_by == ClusterOptions::BestViews::kCount ? "count" : "pixels"},
       {"scale", scale},
       {"ground_plane", {{"normal", {ground.normal.x(), ground.normal.y(), ground.normal.z()}}, {"d", ground.d},
                         {"source", ground_source}}},

@@ -114,6 +114,7 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
   ClusterOptions one_side = o.side.clusters;
   one_side.min_points = ClusterOptions().min_points;
   one_side.max_lost_fraction = ClusterOptions().max_lost_fraction;
+  one_side.best_views_by = ClusterOptions().best_views_by;
   side_options.one_side_clusters = one_side;
   spdlog::info("[yield 1/4] front side: frames, poses, fruit, 3D clusters -> {}", front.out.string());
   y.front_side = RunSide(front, side_options);
@@ -295,6 +296,10 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
       {"link_distance_m", o.side.clusters.link_distance},
       {"split_counted_blobs", o.side.split_counted_blobs},
       {"vote_near_first", o.side.clusters.vote_near_first},
+      {"best_views_by",
+       ResolvedBestViews(o.side.clusters, in.front) == ClusterOptions::BestViews::kCount ? "count" : "pixels"},
+      {"sides_best_views_by",
+       ResolvedBestViews(ClusterOptions(), in.front) == ClusterOptions::BestViews::kCount ? "count" : "pixels"},
       {"match_distance_m", o.registration.match_distance},
       {"row_registration", o.row_registration},
       {"intersection_distance_m", shared_options.intersection_distance},
