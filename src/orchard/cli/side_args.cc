@@ -66,10 +66,9 @@ void AddSideOptions(CLI::App* cmd, SideOptions* options) {
       ->capture_default_str();
   cmd->add_option("--assign-near", o.clusters.assign_near, "A point off every blob votes for the blob whose centre is near")
       ->capture_default_str();
-  const std::map<std::string, ClusterOptions::BestViews> best_views = {
-      {"auto", ClusterOptions::BestViews::kAuto},
-      {"pixels", ClusterOptions::BestViews::kPixels},
-      {"count", ClusterOptions::BestViews::kCount}};
+  std::map<std::string, ClusterOptions::BestViews> best_views;
+  for (auto b : {ClusterOptions::BestViews::kAuto, ClusterOptions::BestViews::kPixels, ClusterOptions::BestViews::kCount})
+    best_views[BestViewsName(b)] = b;
   cmd->add_option("--best-views-by", o.clusters.best_views_by,
                    "Count a cluster in its views with the most fruit pixels (the study's rule) or the highest counts; "
                    "auto (default): counts for instance masks counted one per blob, else pixels")

@@ -108,6 +108,17 @@ ClusterOptions::BestViews ResolvedBestViews(const ClusterOptions& o, const SideI
   return !in.detector && !in.counter ? ClusterOptions::BestViews::kCount : ClusterOptions::BestViews::kPixels;
 }
 
+const char* BestViewsName(ClusterOptions::BestViews best_views) {
+  switch (best_views) {
+    case ClusterOptions::BestViews::kPixels:
+      return "pixels";
+    case ClusterOptions::BestViews::kCount:
+      return "count";
+    default:
+      return "auto";
+  }
+}
+
 std::string EvidenceStatus(const FruitCluster& c, const ClusterOptions& o) {
   if (static_cast<int>(c.points.size()) < o.min_points) return "too_few_points";
   if (c.count == 0) return "no_views";
@@ -583,7 +594,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
       {"poses", in.poses.empty() ? "colmap" : in.poses.string()},
       {"detector", in.detector_name},
       {"counter", in.counter_name},
-      {"best_views_by", clusters.best_views_by == ClusterOptions::BestViews::kCount ? "count" : "pixels"},
+      {"best_views_by", BestViewsName(clusters.best_views_by)},
       {"scale", scale},
       {"ground_plane", {{"normal", {ground.normal.x(), ground.normal.y(), ground.normal.z()}}, {"d", ground.d},
                         {"source", ground_source}}},

@@ -200,6 +200,8 @@ struct SideInputs {
 // options.best_views_by with kAuto decided for these inputs: kCount for
 // instance masks counted one per blob (no detector, no counter), else kPixels.
 ClusterOptions::BestViews ResolvedBestViews(const ClusterOptions& options, const SideInputs& in);
+// "auto", "pixels" or "count", as the command line and the outputs name them.
+const char* BestViewsName(ClusterOptions::BestViews best_views);
 
 struct SideSummary {
   int count = 0;

@@ -106,8 +106,9 @@ std::string YieldReportHtml(const nlohmann::json& y, const std::vector<MapCluste
   row("estimate (both sides merged)", y.at("total").get<double>());
   if (y.contains("calibrated")) {
     const auto& c = y.at("calibrated");
-    std::string name = "calibrated on " + std::to_string(c.at("runs").get<int>()) + " harvested rows (x" +
-                       Num(c.at("factor").get<double>(), 3) + ")";
+    const int runs = c.at("runs").get<int>();
+    std::string name = "calibrated on " + std::to_string(runs) + (runs == 1 ? " harvested row" : " harvested rows") +
+                       " (x" + Num(c.at("factor").get<double>(), 3) + ")";
     if (c.contains("leave_one_out_mean_absolute_error_percent"))
       name += ", expected error " + Num(c.at("leave_one_out_mean_absolute_error_percent").get<double>(), 1) + "%";
     row(name, c.at("total").get<double>());

@@ -122,7 +122,7 @@ TEST_F(YieldTest, MergesBothSidesAndResumes) {
   const auto jc = nlohmann::json::parse(ReadTextFile(*dir_ / "out/yield.json"));
   EXPECT_EQ(jc.at("calibrated").at("total").get<int>(), calibrated.calibrated_total);
   EXPECT_NEAR(jc.at("truth").at("calibrated_percent_of_harvested").get<double>(), 100.0, 0.5);
-  EXPECT_NE(ReadTextFile(*dir_ / "out/report.html").find("calibrated on 1 harvested rows"), std::string::npos);
+  EXPECT_NE(ReadTextFile(*dir_ / "out/report.html").find("calibrated on 1 harvested row (x"), std::string::npos);
   calibration.detector = "unet:models/unet.pt@0123";
   WriteTextFileAtomic(*dir_ / "other.json", CalibrationJson(calibration));
   in.calibration = *dir_ / "other.json";
