@@ -1,13 +1,12 @@
 #include "orchard/merge/calibration.h"
 
 #include <cmath>
-#include <sstream>
-#include <stdexcept>
 
 #include <nlohmann/json.hpp>
 
 #include "orchard/core/error.h"
 #include "orchard/core/file_io.h"
+#include "orchard/data/text_format.h"
 
 namespace orchard {
 
@@ -68,27 +67,21 @@ CalibrationRun ReadCalibrationRun(const fs::path& yield, double harvested) {
 }
 
 std::vector<CalibrationRun> ReadCalibrationTable(const fs::path& csv) {
-  std::istringstream in(ReadTextFile(csv));
-  std::string line;
-  if (!std::getline(in, line) || line.rfind("yield,harvested", 0) != 0)
+  const std::vector<data_internal::TextLine> lines = data_internal::ReadNonEmptyLines(csv);
+  if (lines.empty() || lines[0].text.rfind("yield,harvested", 0) != 0)
     Fail("calibration table ", csv.string(), " must start with the header 'yield,harvested'");
   std::vector<CalibrationRun> runs;
-  int number = 1;
-  while (std::getline(in, line)) {
-    ++number;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line.empty()) continue;
-    const size_t comma = line.rfind(',');
-    if (comma == std::string::npos) Fail(csv.string(), " line ", number, ": expected 'yield,harvested', got '", line, "'");
-    double harvested = 0;
-    try {
-      size_t used = 0;
-      harvested = std::stod(line.substr(comma + 1), &used);
-      if (used != line.size() - comma - 1) throw std::invalid_argument("trailing text");
-    } catch (const std::exception&) {
-      Fail(csv.string(), " line ", number, ": '", line.substr(comma + 1), "' is not a number of apples");
-    }
-    fs::path yield = line.substr(0, comma);
+  for (size_t i = 1; i < lines.size(); ++i) {
+    const auto& line = lines[i];
+    // The count is after the last comma, so a path may hold commas.
+    const size_t comma = line.text.rfind(',');
+    if (comma == std::string::npos)
+      Fail(csv.string(), ":", line.number, ": expected 'yield,harvested', got '", line.text, "'");
+    const std::vector<std::string> count = data_internal::SplitFields(line.text.substr(comma + 1));
+    const double harvested =
+        data_internal::ParseNumber(count.size() == 1 ? count[0] : line.text.substr(comma + 1), csv, line.number,
+                                   "harvested");
+    fs::path yield = line.text.substr(0, comma);
     if (yield.is_relative()) yield = csv.parent_path() / yield;
     runs.push_back(ReadCalibrationRun(yield, harvested));
   }
