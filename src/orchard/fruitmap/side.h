@@ -89,7 +89,7 @@ struct ClusterOptions {
   // Clusters nearer than the row distance minus this (m) float between the
   // camera and the row: wrong pairings, removed. On 40 development sides
   // (exact masks) no kept cluster more than 0.4 m in front held an apple,
-  // nor more than 0.5 m on three round-canopy rows; those between 0.6 and
+  // nor more than 0.6 m on three round-canopy rows; those between 0.6 and
   // 1.0 m counted 65 chance apples (1.0 before: within 3% 34 -> 38 of 40,
   // MAE 1.48 -> 1.30%; docs/side.md).
   double near_margin = 0.6;
