@@ -79,7 +79,11 @@ void AddSideOptions(CLI::App* cmd, SideOptions* options) {
       ->capture_default_str();
   cmd->add_option("--row-distance", o.clusters.row_distance, "Camera path to row centre (m), 0 = estimate")
       ->capture_default_str();
-  cmd->add_option("--next-row-margin", o.clusters.next_row_margin, "Beyond row distance + this (m): next row")
+  cmd->add_option("--next-row-gap", o.clusters.next_row_gap,
+                  "Next row: behind the middle of the first fruit-free gap this long (m) behind the row, 0 = margin")
+      ->capture_default_str();
+  cmd->add_option("--next-row-margin", o.clusters.next_row_margin,
+                  "Without such a gap: beyond row distance + this (m) is the next row")
       ->capture_default_str();
   cmd->add_option("--near-margin", o.clusters.near_margin, "Nearer than row distance - this (m): removed")
       ->capture_default_str();

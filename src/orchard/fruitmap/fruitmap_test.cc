@@ -146,6 +146,44 @@ std::vector<FruitFrame> RenderBalls(const std::vector<CameraView>& views, const 
   return frames;
 }
 
+// Fruit-point distances: `points` spread evenly over [from, to).
+void AddPoints(std::vector<double>* d, double from, double to, int points) {
+  for (int i = 0; i < points; ++i) d->push_back(from + (to - from) * (i + 0.5) / points);
+}
+
+TEST(NextRowGapCut, CutsInTheMiddleOfTheAisleBetweenTheRowAndTheNextRow) {
+  std::vector<double> d;
+  AddPoints(&d, 1.6, 3.35, 1750);  // the filmed row, row distance 2.1
+  AddPoints(&d, 5.0, 6.0, 800);   // the next row's near face
+  d.push_back(4.0);               // a stray point in the aisle
+  // The first empty bin starts at 3.35 (row distance + 5 bins), the next row at 4.85.
+  EXPECT_NEAR(NextRowGapCut(d, 2.1, 1.0, 0.01), 4.1, 1e-9);
+  // A thick round canopy: fruit to 4.0 m, the next row from 6.0 m; the fixed
+  // 1.5 m margin would cut at 3.6 m, through the far half of the trees.
+  std::vector<double> round;
+  AddPoints(&round, 1.5, 4.0, 2500);
+  AddPoints(&round, 6.0, 7.0, 800);
+  EXPECT_NEAR(NextRowGapCut(round, 1.6, 1.0, 0.01), 4.975, 1e-9);
+  // Gaps shorter than asked for are not the aisle.
+  EXPECT_LT(NextRowGapCut(round, 1.6, 2.5, 0.01), 0);
+}
+
+TEST(NextRowGapCut, WithoutANextRowTheCutLiesBehindTheRowsFruit) {
+  std::vector<double> d;
+  AddPoints(&d, 1.6, 3.35, 1750);
+  d.push_back(3.9);  // stray points, nothing behind
+  d.push_back(4.3);
+  EXPECT_NEAR(NextRowGapCut(d, 2.1, 1.0, 0.01), 2.1 + 5 * 0.25 + 0.5, 1e-9);
+}
+
+TEST(NextRowGapCut, NoGapWhenFruitRunsOnToTheLastBin) {
+  std::vector<double> d;
+  AddPoints(&d, 1.6, 6.0, 4400);
+  EXPECT_LT(NextRowGapCut(d, 2.1, 1.0, 0.01), 0);
+  EXPECT_LT(NextRowGapCut({}, 2.1, 1.0, 0.01), 0);
+  EXPECT_LT(NextRowGapCut(d, 2.1, 0.0, 0.01), 0);  // gap 0: the fixed margin
+}
+
 TEST(CountFruitClusters, CountsEachBallOnceAndRemovesFallenAndNextRow) {
   std::vector<CameraView> views;
   for (int i = 0; i < 16; ++i) views.push_back(ViewAt(-0.5 + 0.1 * i));

@@ -64,6 +64,34 @@ double DensestFruitDistance(const std::vector<std::pair<double, double>>& distan
 
 }  // namespace
 
+double NextRowGapCut(const std::vector<double>& point_distances, double row_distance, double gap,
+                     double sparse_fraction) {
+  constexpr double kBin = 0.25;
+  std::map<int, int> bins;  // bin behind the row distance (negative: in front) -> points
+  for (double d : point_distances) ++bins[static_cast<int>(std::floor((d - row_distance) / kBin))];
+  if (bins.empty() || gap <= 0) return -1;
+  int fullest = 0;
+  for (const auto& [bin, points] : bins) fullest = std::max(fullest, points);
+  const auto sparse = [&](int bin) {
+    const auto it = bins.find(bin);
+    return it == bins.end() || it->second <= sparse_fraction * fullest;
+  };
+  const int need = static_cast<int>(std::ceil(gap / kBin - 1e-9));
+  const int last = bins.rbegin()->first;
+  int run_start = -1;
+  for (int bin = 0; bin <= last; ++bin) {
+    if (sparse(bin)) {
+      if (run_start < 0) run_start = bin;
+      continue;
+    }
+    if (run_start >= 0 && bin - run_start >= need) return row_distance + (run_start + bin) * kBin / 2;
+    run_start = -1;
+  }
+  // A sparse run with no fruit behind it: no next row in view, the row's
+  // fruit ends where the run starts. A full last bin: no gap seen.
+  return run_start >= 0 ? row_distance + run_start * kBin + gap / 2 : -1;
+}
+
 std::vector<int> MergeSharedComponents(const std::vector<BlobVotes>& votes, int k, double fraction) {
   std::vector<int> total(k, 0);
   std::vector<std::map<int, int>> shared(k);  // component -> other -> own votes on blobs both vote for
@@ -98,6 +126,9 @@ void ClusterOptions::Check() const {
                        "merge shared fraction must be in [0, 1], got ", merge_shared_fraction);
   ORCHARD_CHECK_OPTION(best_views >= 1, "best views must be at least 1, got ", best_views);
   ORCHARD_CHECK_OPTION(row_distance >= 0, "row distance must be >= 0, got ", row_distance);
+  ORCHARD_CHECK_OPTION(next_row_gap >= 0, "next-row gap must be >= 0, got ", next_row_gap);
+  ORCHARD_CHECK_OPTION(next_row_sparse >= 0 && next_row_sparse < 1, "next-row sparse fraction must be in [0, 1), got ",
+                       next_row_sparse);
   ORCHARD_CHECK_OPTION(next_row_margin > 0, "next-row margin must be positive, got ", next_row_margin);
   ORCHARD_CHECK_OPTION(near_margin > 0, "near margin must be positive, got ", near_margin);
 }
@@ -245,7 +276,13 @@ ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std
                       })->pixels);
   }
   r.row_distance = o.row_distance > 0 ? o.row_distance : DensestFruitDistance(tree_distances);
-  r.depth_cutoff = r.row_distance + o.next_row_margin;
+  std::vector<double> point_distances;
+  for (const auto& c : r.clusters)
+    if (c.status == "kept")
+      for (int i : c.points) point_distances.push_back(across.dot(xyz[i] - mean));
+  const double gap_cut = NextRowGapCut(point_distances, r.row_distance, o.next_row_gap, o.next_row_sparse);
+  r.depth_cutoff_from_gap = gap_cut > 0;
+  r.depth_cutoff = r.depth_cutoff_from_gap ? gap_cut : r.row_distance + o.next_row_margin;
   for (auto& c : r.clusters) {
     if (c.status == "kept" && c.distance > r.depth_cutoff) c.status = "next_row";
     // Nothing grows between the camera and the row: clusters there are
@@ -604,6 +641,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
                      {"up", {r.row_up.x(), r.row_up.y(), r.row_up.z()}}}},
       {"row_distance", r.row_distance},
       {"depth_cutoff", r.depth_cutoff},
+      {"depth_cutoff_from", r.depth_cutoff_from_gap ? "gap" : "margin"},
       {"fruit_points", r.points.size()},
       {"clusters", {{"total", r.clusters.size()}, {"kept", s.clusters_kept}, {"removed", removed}}},
       {"warnings", warnings},

@@ -82,9 +82,20 @@ struct ClusterOptions {
   // Distance from the camera path to the filmed row's fruit (m); 0 = the
   // 25 cm band of cluster distances with the most fruit pixels.
   double row_distance = 0;
-  // Clusters farther from the camera path than the row distance plus this
-  // (m) belong to the next row (the canopy thickness, 1.2 m for the default
-  // synthetic row, plus a margin).
+  // Where the next row begins. Binned by distance (25 cm) behind the row
+  // distance, the fruit points of the clusters that pass the evidence checks
+  // show the filmed row, then an empty aisle, then the next row: on 46
+  // development sides (40 fruit walls, 6 round canopies) the row's fruit
+  // ended 0.5-2.0 m behind the row distance and a gap of 1.5 m or more
+  // followed. The cut lies in the middle of the first run of at least this
+  // many metres (from the row distance on) whose bins each hold at most
+  // next_row_sparse of the fullest bin's points; a run with no fruit behind
+  // it ends half this length after it starts. 0 = always the fixed margin.
+  double next_row_gap = 1.0;
+  double next_row_sparse = 0.01;
+  // Without such a gap, clusters farther from the camera path than the row
+  // distance plus this (m) belong to the next row (the canopy thickness,
+  // 1.2 m for the default synthetic row, plus a margin).
   double next_row_margin = 1.5;
   // Clusters nearer than the row distance minus this (m) float between the
   // camera and the row: wrong pairings, removed. On 40 development sides
@@ -120,6 +131,7 @@ struct ClusterResult {
   std::vector<FruitCluster> clusters;
   double row_distance = 0;
   double depth_cutoff = 0;
+  bool depth_cutoff_from_gap = false;  // false: row distance + next_row_margin
   // The side's row frame in the poses' frame: origin = mean camera centre
   // dropped onto the ground, x along the camera path, y across it towards the
   // filmed row, z up (the ground normal). The two sides' merge works in it.
@@ -129,6 +141,13 @@ struct ClusterResult {
   int count = 0;            // sum over kept clusters
   int single_frame_sum = 0; // sum of all blob counts over all frames
 };
+
+// The next-row cut (ClusterOptions::next_row_gap) from the distances of
+// fruit points from the camera path: the middle of the first sparse run of
+// at least `gap` m behind the row distance, or a negative number when there
+// is none.
+double NextRowGapCut(const std::vector<double>& point_distances, double row_distance, double gap,
+                     double sparse_fraction);
 
 // "kept", or why the cluster's own evidence (points, views, votes; not its
 // place in the row) is too weak: too_few_points, no_views, few_views, ghost.
