@@ -157,15 +157,15 @@ TEST(NextRowGapCut, CutsInTheMiddleOfTheAisleBetweenTheRowAndTheNextRow) {
   AddPoints(&d, 5.0, 6.0, 800);   // the next row's near face
   d.push_back(4.0);               // a stray point in the aisle
   // The first empty bin starts at 3.35 (row distance + 5 bins), the next row at 4.85.
-  EXPECT_NEAR(NextRowGapCut(d, 2.1, 1.0, 0.01), 4.1, 1e-9);
+  EXPECT_NEAR(NextRowGapCut(d, 2.1, 1.0, 0.01).value_or(-1), 4.1, 1e-9);
   // A thick round canopy: fruit to 4.0 m, the next row from 6.0 m; the fixed
   // 1.5 m margin would cut at 3.6 m, through the far half of the trees.
   std::vector<double> round;
   AddPoints(&round, 1.5, 4.0, 2500);
   AddPoints(&round, 6.0, 7.0, 800);
-  EXPECT_NEAR(NextRowGapCut(round, 1.6, 1.0, 0.01), 4.975, 1e-9);
+  EXPECT_NEAR(NextRowGapCut(round, 1.6, 1.0, 0.01).value_or(-1), 4.975, 1e-9);
   // Gaps shorter than asked for are not the aisle.
-  EXPECT_LT(NextRowGapCut(round, 1.6, 2.5, 0.01), 0);
+  EXPECT_FALSE(NextRowGapCut(round, 1.6, 2.5, 0.01));
 }
 
 TEST(NextRowGapCut, WithoutANextRowTheCutLiesBehindTheRowsFruit) {
@@ -173,15 +173,15 @@ TEST(NextRowGapCut, WithoutANextRowTheCutLiesBehindTheRowsFruit) {
   AddPoints(&d, 1.6, 3.35, 1750);
   d.push_back(3.9);  // stray points, nothing behind
   d.push_back(4.3);
-  EXPECT_NEAR(NextRowGapCut(d, 2.1, 1.0, 0.01), 2.1 + 5 * 0.25 + 0.5, 1e-9);
+  EXPECT_NEAR(NextRowGapCut(d, 2.1, 1.0, 0.01).value_or(-1), 2.1 + 5 * 0.25 + 0.5, 1e-9);
 }
 
 TEST(NextRowGapCut, NoGapWhenFruitRunsOnToTheLastBin) {
   std::vector<double> d;
   AddPoints(&d, 1.6, 6.0, 4400);
-  EXPECT_LT(NextRowGapCut(d, 2.1, 1.0, 0.01), 0);
-  EXPECT_LT(NextRowGapCut({}, 2.1, 1.0, 0.01), 0);
-  EXPECT_LT(NextRowGapCut(d, 2.1, 0.0, 0.01), 0);  // gap 0: the fixed margin
+  EXPECT_FALSE(NextRowGapCut(d, 2.1, 1.0, 0.01));
+  EXPECT_FALSE(NextRowGapCut({}, 2.1, 1.0, 0.01));
+  EXPECT_FALSE(NextRowGapCut(d, 2.1, 0.0, 0.01));  // gap 0: the fixed margin
 }
 
 TEST(CountFruitClusters, CountsEachBallOnceAndRemovesFallenAndNextRow) {
@@ -275,6 +275,30 @@ TEST(SplitCountedBlobs, OnePiecePerCountedAppleAtItsDisc) {
   again.labels = before.labels.clone();
   SplitCountedBlobs(&again);
   EXPECT_EQ(cv::countNonZero(again.labels != frame.labels), 0);
+}
+
+TEST(CountFruitClusters, KeepsTheFarHalfOfAThickCanopyAndCutsTheNextRowInTheAisle) {
+  std::vector<CameraView> views;
+  for (int i = 0; i < 16; ++i) views.push_back(ViewAt(-0.5 + 0.1 * i));
+  // A round tree 1.8 m deep (2.2-4.0 m from the cameras) and the next row 6 m away.
+  const std::vector<Eigen::Vector3d> balls = {
+      {-0.2, -0.3, 1.2}, {0.3, 0.0, 1.6}, {0.6, 0.5, 2.0}, {0.1, 1.0, 1.4}, {0.5, 1.5, 1.8}, {0.4, 3.5, 1.4}};
+  const std::vector<FruitFrame> frames = RenderBalls(views, balls, 0.04);
+  Plane ground;  // z = 0
+  ClusterOptions o;
+  ClusterResult r = CountFruitClusters(views, frames, ground, o);
+  std::map<std::string, int> status;
+  for (const auto& c : r.clusters) status[c.status] += c.count;
+  EXPECT_TRUE(r.depth_cutoff_from_gap);
+  EXPECT_GT(r.depth_cutoff, 4.0);
+  EXPECT_LT(r.depth_cutoff, 6.0);
+  EXPECT_EQ(r.count, 5);
+  EXPECT_EQ(status["next_row"], 1);
+  // The fixed margin (row distance + 1.5 m) cuts the far half's last apple.
+  o.next_row_gap = 0;
+  r = CountFruitClusters(views, frames, ground, o);
+  EXPECT_FALSE(r.depth_cutoff_from_gap);
+  EXPECT_EQ(r.count, 4);
 }
 
 TEST(CountFruitClusters, TouchingApplesInOneBlobAreLocatedWhenTheBlobIsSplit) {

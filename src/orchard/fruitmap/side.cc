@@ -64,12 +64,12 @@ double DensestFruitDistance(const std::vector<std::pair<double, double>>& distan
 
 }  // namespace
 
-double NextRowGapCut(const std::vector<double>& point_distances, double row_distance, double gap,
-                     double sparse_fraction) {
+std::optional<double> NextRowGapCut(const std::vector<double>& point_distances, double row_distance, double gap,
+                                    double sparse_fraction) {
   constexpr double kBin = 0.25;
   std::map<int, int> bins;  // bin behind the row distance (negative: in front) -> points
   for (double d : point_distances) ++bins[static_cast<int>(std::floor((d - row_distance) / kBin))];
-  if (bins.empty() || gap <= 0) return -1;
+  if (bins.empty() || gap <= 0) return std::nullopt;
   int fullest = 0;
   for (const auto& [bin, points] : bins) fullest = std::max(fullest, points);
   const auto sparse = [&](int bin) {
@@ -89,7 +89,8 @@ double NextRowGapCut(const std::vector<double>& point_distances, double row_dist
   }
   // A sparse run with no fruit behind it: no next row in view, the row's
   // fruit ends where the run starts. A full last bin: no gap seen.
-  return run_start >= 0 ? row_distance + run_start * kBin + gap / 2 : -1;
+  if (run_start < 0) return std::nullopt;
+  return row_distance + run_start * kBin + gap / 2;
 }
 
 std::vector<int> MergeSharedComponents(const std::vector<BlobVotes>& votes, int k, double fraction) {
@@ -280,9 +281,10 @@ ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std
   for (const auto& c : r.clusters)
     if (c.status == "kept")
       for (int i : c.points) point_distances.push_back(across.dot(xyz[i] - mean));
-  const double gap_cut = NextRowGapCut(point_distances, r.row_distance, o.next_row_gap, o.next_row_sparse);
-  r.depth_cutoff_from_gap = gap_cut > 0;
-  r.depth_cutoff = r.depth_cutoff_from_gap ? gap_cut : r.row_distance + o.next_row_margin;
+  const std::optional<double> gap_cut =
+      NextRowGapCut(point_distances, r.row_distance, o.next_row_gap, o.next_row_sparse);
+  r.depth_cutoff_from_gap = gap_cut.has_value();
+  r.depth_cutoff = gap_cut.value_or(r.row_distance + o.next_row_margin);
   for (auto& c : r.clusters) {
     if (c.status == "kept" && c.distance > r.depth_cutoff) c.status = "next_row";
     // Nothing grows between the camera and the row: clusters there are

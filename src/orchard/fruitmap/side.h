@@ -144,9 +144,8 @@ struct ClusterResult {
 
 // The next-row cut (ClusterOptions::next_row_gap) from the distances of
 // fruit points from the camera path: the middle of the first sparse run of
-// at least `gap` m behind the row distance, or a negative number when there
-// is none.
-double NextRowGapCut(const std::vector<double>& point_distances, double row_distance, double gap,
+// at least `gap` m behind the row distance; nothing when there is none.
+std::optional<double> NextRowGapCut(const std::vector<double>& point_distances, double row_distance, double gap,
                      double sparse_fraction);
 
 // "kept", or why the cluster's own evidence (points, views, votes; not its
