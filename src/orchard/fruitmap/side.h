@@ -146,7 +146,7 @@ struct ClusterResult {
 // fruit points from the camera path: the middle of the first sparse run of
 // at least `gap` m behind the row distance; nothing when there is none.
 std::optional<double> NextRowGapCut(const std::vector<double>& point_distances, double row_distance, double gap,
-                     double sparse_fraction);
+                                    double sparse_fraction);
 
 // "kept", or why the cluster's own evidence (points, views, votes; not its
 // place in the row) is too weak: too_few_points, no_views, few_views, ghost.
