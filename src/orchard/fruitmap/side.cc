@@ -46,37 +46,40 @@ void PathAxes(const std::vector<CameraView>& views, const Plane& ground, Eigen::
   *along = u, *across = f.normalized();
 }
 
+// Depth bands across the row (m): the row distance and the next-row cut both
+// read the fruit's distances from the camera path in these.
+constexpr double kDistanceBand = 0.25;
+
 // The filmed row's fruit: the 25 cm band of cluster distances holding the
 // most fruit pixels (each cluster weighted by the pixels of its largest view).
 // Counting clusters instead would pick the next row when the filmed stretch
 // is short and the next row fills the frame; its apples are small in the
 // image, the filmed row's large.
 double DensestFruitDistance(const std::vector<std::pair<double, double>>& distance_pixels) {
-  constexpr double kBand = 0.25;
   std::map<int, double> bands;
   for (const auto& [d, pixels] : distance_pixels)
-    if (d > 0) bands[static_cast<int>(d / kBand)] += pixels;
+    if (d > 0) bands[static_cast<int>(d / kDistanceBand)] += pixels;
   if (bands.empty()) return 0;
   const auto best = std::max_element(bands.begin(), bands.end(),
                                      [](const auto& a, const auto& b) { return a.second < b.second; });
-  return (best->first + 0.5) * kBand;
+  return (best->first + 0.5) * kDistanceBand;
 }
 
 }  // namespace
 
 std::optional<double> NextRowGapCut(const std::vector<double>& point_distances, double row_distance, double gap,
                                     double sparse_fraction) {
-  constexpr double kBin = 0.25;
+  if (gap <= 0) return std::nullopt;
   std::map<int, int> bins;  // bin behind the row distance (negative: in front) -> points
-  for (double d : point_distances) ++bins[static_cast<int>(std::floor((d - row_distance) / kBin))];
-  if (bins.empty() || gap <= 0) return std::nullopt;
+  for (double d : point_distances) ++bins[static_cast<int>(std::floor((d - row_distance) / kDistanceBand))];
+  if (bins.empty()) return std::nullopt;
   int fullest = 0;
   for (const auto& [bin, points] : bins) fullest = std::max(fullest, points);
   const auto sparse = [&](int bin) {
     const auto it = bins.find(bin);
     return it == bins.end() || it->second <= sparse_fraction * fullest;
   };
-  const int need = static_cast<int>(std::ceil(gap / kBin - 1e-9));
+  const int need = static_cast<int>(std::ceil(gap / kDistanceBand - 1e-9));
   const int last = bins.rbegin()->first;
   int run_start = -1;
   for (int bin = 0; bin <= last; ++bin) {
@@ -84,13 +87,13 @@ std::optional<double> NextRowGapCut(const std::vector<double>& point_distances, 
       if (run_start < 0) run_start = bin;
       continue;
     }
-    if (run_start >= 0 && bin - run_start >= need) return row_distance + (run_start + bin) * kBin / 2;
+    if (run_start >= 0 && bin - run_start >= need) return row_distance + (run_start + bin) * kDistanceBand / 2;
     run_start = -1;
   }
   // A sparse run with no fruit behind it: no next row in view, the row's
   // fruit ends where the run starts. A full last bin: no gap seen.
   if (run_start < 0) return std::nullopt;
-  return row_distance + run_start * kBin + gap / 2;
+  return row_distance + run_start * kDistanceBand + gap / 2;
 }
 
 std::vector<int> MergeSharedComponents(const std::vector<BlobVotes>& votes, int k, double fraction) {
