@@ -32,6 +32,7 @@ p.add_argument('--no-synth', action='store_true')
 p.add_argument('--train-on-val', action='store_true')
 p.add_argument('--final', action='store_true', help='keep the last epoch, not the best on validation')
 p.add_argument('--dump-aug', default='')
+p.add_argument('--init', default='', help='start from these weights (pretrain.py output; tensors it lacks keep their initialisation)')
 p.add_argument('--max-minutes', type=float, default=1e9)
 p.add_argument('--fit-minutes', type=float, default=0, help='cut epochs after the first so the run fits')
 a = p.parse_args()
@@ -109,6 +110,11 @@ class ResNet(nn.Module):
         return s.head(F.adaptive_avg_pool2d(s.stages(s.stem(x)), 1).flatten(1))
 
 net = ResNet(a.depth, a.width).to(dev).to(memory_format=torch.channels_last)
+if a.init:
+    sd0 = net.state_dict(); pre = torch.load(a.init, map_location='cpu')
+    pre = {k: v for k, v in pre.items() if k in sd0 and sd0[k].shape == v.shape}
+    net.load_state_dict(pre, strict=False)
+    print(f'init {a.init}: {len(pre)} of {len(sd0)} tensors', flush=True)
 ema = None
 if a.ema > 0:
     ema = ResNet(a.depth, a.width).to(dev).to(memory_format=torch.channels_last); ema.load_state_dict(net.state_dict())
