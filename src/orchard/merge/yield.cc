@@ -272,8 +272,9 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
                  {"back_clusters", y.merge_back},
                  {"shared", std::round(y.merge_shared * 10) / 10},
                  {"note", "total = front_clusters + back_clusters - shared: the sides' clusters kept for the merge "
-                          "(5 fruit points, ghosts removed) and the apples the inclusion-exclusion counted once; "
-                          "front and back above are each side's own count (orchard side's rules)"}}},
+                          "(" + std::to_string(o.side.clusters.min_points) +
+                              " fruit points, ghosts removed) and the apples the inclusion-exclusion counted once; "
+                              "front and back above are each side's own count (orchard side's rules)"}}},
       {"per_metre", per_metre},
       {"bin_length_m", o.bin_length},
       {"alignment", AlignmentJson(y.registration, method)},
