@@ -48,20 +48,25 @@ def read(d):
             im = cv2.resize(im, (max(1, round(im.shape[1]*s)), max(1, round(im.shape[0]*s))), interpolation=cv2.INTER_AREA)
         out.append((im, int(count), photo_id(name), name))
     return out
-sets = {}
-for arg in sys.argv[2:]:
-    key, dirs = arg.split('=')
-    sets[key] = sum((read(d) for d in dirs.split(',')), [])
-train_photos = [p for _, _, p, _ in sets['train']]
-val = set(choose(train_photos, 0.2, 1))
-print('val photos', len(val), 'of', len(set(train_photos)), sorted(val)[:5])
-arrays = {}
-for key, items in sets.items():
-    enc = [cv2.imencode('.png' if key.startswith('test') else '.jpg', im, [cv2.IMWRITE_JPEG_QUALITY, 95])[1].reshape(-1) for im, *_ in items]
-    arrays[key + '_data'] = np.concatenate(enc)
-    arrays[key + '_offsets'] = np.cumsum([0] + [len(e) for e in enc])
-    arrays[key + '_labels'] = np.array([c for _, c, _, _ in items], np.int64)
-    arrays[key + '_val'] = np.array([p in val for _, _, p, _ in items])
-    arrays[key + '_names'] = np.array([n for *_, n in items])
-    print(key, len(items), 'val', int(arrays[key + '_val'].sum()), np.bincount(arrays[key + '_labels'], minlength=7))
-np.savez(sys.argv[1], **arrays)
+def main():
+    sets = {}
+    for arg in sys.argv[2:]:
+        key, dirs = arg.split('=')
+        sets[key] = sum((read(d) for d in dirs.split(',')), [])
+    train_photos = [p for _, _, p, _ in sets['train']]
+    val = set(choose(train_photos, 0.2, 1))
+    print('val photos', len(val), 'of', len(set(train_photos)), sorted(val)[:5])
+    arrays = {}
+    for key, items in sets.items():
+        enc = [cv2.imencode('.png' if key.startswith('test') else '.jpg', im, [cv2.IMWRITE_JPEG_QUALITY, 95])[1].reshape(-1) for im, *_ in items]
+        arrays[key + '_data'] = np.concatenate(enc)
+        arrays[key + '_offsets'] = np.cumsum([0] + [len(e) for e in enc])
+        arrays[key + '_labels'] = np.array([c for _, c, _, _ in items], np.int64)
+        arrays[key + '_val'] = np.array([p in val for _, _, p, _ in items])
+        arrays[key + '_names'] = np.array([n for *_, n in items])
+        print(key, len(items), 'val', int(arrays[key + '_val'].sum()), np.bincount(arrays[key + '_labels'], minlength=7))
+    np.savez(sys.argv[1], **arrays)
+
+
+if __name__ == '__main__':
+    main()

@@ -13,40 +13,10 @@
 #   pack_pretrain.py ssl OUT.npz --ssl-scale 0.6 --quality 85 --train DIR,DIR --test DIR,DIR --images DIR,DIR
 import sys, csv, os, re, glob, argparse, cv2, numpy as np
 
-MASK = (1 << 64) - 1
-class MT64:  # std::mt19937_64, as in pack.py
-    def __init__(s, seed):
-        s.mt = [0] * 312; s.mt[0] = seed & MASK
-        for i in range(1, 312):
-            s.mt[i] = (6364136223846793005 * (s.mt[i-1] ^ (s.mt[i-1] >> 62)) + i) & MASK
-        s.i = 312
-    def __call__(s):
-        if s.i >= 312:
-            for i in range(312):
-                x = (s.mt[i] & 0xFFFFFFFF80000000) | (s.mt[(i+1) % 312] & 0x7FFFFFFF)
-                xa = x >> 1
-                if x & 1: xa ^= 0xB5026F5AA96619E9
-                s.mt[i] = s.mt[(i + 156) % 312] ^ xa
-            s.i = 0
-        y = s.mt[s.i]; s.i += 1
-        y ^= (y >> 29) & 0x5555555555555555
-        y ^= (y << 17) & 0x71D67FFFEDA60000
-        y ^= (y << 37) & 0xFFF7EEE000000000
-        y ^= y >> 43
-        return y & MASK
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from pack import MT64, choose, photo_id  # the same photo split as pack.py and orchard
 def image_stem(name):  # patch file -> the 640x640 crop it was cut from
     return re.sub(r"_p[0-9]+$", "", os.path.splitext(os.path.basename(name))[0])
-def photo_id(name):
-    stem = image_stem(name)
-    u = stem.rfind('_')
-    if u < 0 or u + 1 == len(stem): return stem
-    return stem[:u] if stem[u+1:].isdigit() else stem
-def choose(photos, frac, seed):
-    p = sorted(set(photos)); rng = MT64(seed)
-    for i in range(len(p), 1, -1):
-        j = rng() % i; p[i-1], p[j] = p[j], p[i-1]
-    n = int(np.floor(frac * len(p) + 0.5)); n = min(max(n, 1), len(p) - 1)
-    return sorted(p[:n])
 def cap(im, side):
     s = side / max(im.shape[:2])
     if s < 1:
