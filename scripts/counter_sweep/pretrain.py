@@ -12,6 +12,8 @@
 # real training patches, cosine, k=20) on the test sets, and in synth mode its own classifier's.
 import argparse, json, math, os, sys, time
 import cv2, numpy as np, torch, torch.nn as nn, torch.nn.functional as F
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from nets import letterbox, ResNet, gauss_blur  # as train.py
 
 p = argparse.ArgumentParser()
 p.add_argument('--mode', required=True, choices=['synth', 'ssl'])
@@ -40,15 +42,6 @@ torch.backends.cuda.matmul.allow_tf32 = True; torch.backends.cudnn.allow_tf32 = 
 if dev.type == 'cpu': torch.set_num_threads(1)
 t_start = time.time()
 
-def letterbox(im, size):  # as train.py
-    s = size / max(im.shape[:2])
-    w = min(max(int(math.floor(im.shape[1] * s + 0.5)), 1), size)
-    h = min(max(int(math.floor(im.shape[0] * s + 0.5)), 1), size)
-    r = cv2.resize(im, (w, h), interpolation=cv2.INTER_AREA if s < 1 else cv2.INTER_LINEAR)
-    out = np.zeros((size, size, 3), np.uint8)
-    y0, x0 = (size - h) // 2, (size - w) // 2
-    out[y0:y0 + h, x0:x0 + w] = r
-    return out
 def decode(D, key, size=None):
     data, off = D[key + '_data'], D[key + '_offsets']
     ims = [cv2.imdecode(data[off[i]:off[i + 1]], cv2.IMREAD_COLOR) for i in range(len(off) - 1)]
@@ -56,41 +49,6 @@ def decode(D, key, size=None):
     return torch.from_numpy(np.stack(ims)[..., ::-1].copy()).permute(0, 3, 1, 2).contiguous()  # uint8 RGB NCHW
 def to_float(x): return x.float().div_(127.5).sub_(1)
 
-class Block(nn.Module):  # as train.py (same parameter names)
-    def __init__(s, i, o, st):
-        super().__init__()
-        s.conv1 = nn.Conv2d(i, o, 3, st, 1, bias=False); s.bn1 = nn.BatchNorm2d(o)
-        s.conv2 = nn.Conv2d(o, o, 3, 1, 1, bias=False); s.bn2 = nn.BatchNorm2d(o)
-        s.shortcut = nn.Sequential(nn.Conv2d(i, o, 1, st, bias=False), nn.BatchNorm2d(o)) if st != 1 or i != o else None
-    def forward(s, x):
-        y = s.bn2(s.conv2(F.relu(s.bn1(s.conv1(x)))))
-        return F.relu(y + (s.shortcut(x) if s.shortcut is not None else x))
-class ResNet(nn.Module):  # ResNet-18 of train.py
-    def __init__(s, wd):
-        super().__init__()
-        s.stem = nn.Sequential(nn.Conv2d(3, wd, 7, 2, 3, bias=False), nn.BatchNorm2d(wd), nn.ReLU(True), nn.MaxPool2d(3, 2, 1))
-        layers, i = [], wd
-        for st_i, n in enumerate([2, 2, 2, 2]):
-            width = wd << st_i
-            for b in range(n):
-                layers.append(Block(i, width, 2 if b == 0 and st_i > 0 else 1)); i = width
-        s.stages = nn.Sequential(*layers)
-        s.head = nn.Linear(i, 7); s.features = i
-    def embed(s, x): return F.adaptive_avg_pool2d(s.stages(s.stem(x)), 1).flatten(1)
-    def forward(s, x): return s.head(s.embed(x))
-
-def gauss_blur(x, sigma):  # as train.py
-    k = 7; r = torch.arange(k, device=x.device, dtype=x.dtype) - k // 2
-    s = sigma.clamp(min=1e-3)[:, None]
-    g = torch.exp(-0.5 * (r[None] / s) ** 2); g = g / g.sum(1, keepdim=True)
-    g = torch.where((sigma > 0.1)[:, None], g, (r == 0).to(x.dtype)[None].expand_as(g))
-    n, c, h, wd = x.shape
-    y = x.reshape(1, n * c, h, wd)
-    gx = g.repeat_interleave(c, 0)[:, None, None, :]
-    gy = g.repeat_interleave(c, 0)[:, None, :, None]
-    y = F.conv2d(F.pad(y, (k // 2, k // 2, 0, 0), mode='replicate'), gx, groups=n * c)
-    y = F.conv2d(F.pad(y, (0, 0, k // 2, k // 2), mode='replicate'), gy, groups=n * c)
-    return y.reshape(n, c, h, wd)
 def color_jitter(x, amount, gray_p=0.0):
     n = x.shape[0]; d = x.device
     u = (x + 1) / 2
@@ -138,7 +96,7 @@ def ssl_views(src, cx, cy, side):
     return torch.where(inside, x, torch.full_like(x, -1.0))
 
 D = np.load(a.data)
-net = ResNet(a.width).to(dev).to(memory_format=torch.channels_last)
+net = ResNet(18, a.width).to(dev).to(memory_format=torch.channels_last)
 if a.mode == 'synth':
     xs_u8 = decode(D, 'synth', a.input).to(dev); ys = torch.from_numpy(D['synth_labels']).to(dev)
     cc = np.bincount(ys.cpu().numpy(), minlength=7).astype(float)
