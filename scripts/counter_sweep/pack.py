@@ -26,8 +26,10 @@ class MT64:
         y ^= (y << 37) & 0xFFF7EEE000000000
         y ^= y >> 43
         return y & MASK
+def image_stem(name):  # patch file -> the 640x640 crop it was cut from
+    return re.sub(r"_p[0-9]+$", "", os.path.splitext(os.path.basename(name))[0])
 def photo_id(name):
-    stem = re.sub(r"_p[0-9]+$", "", os.path.splitext(os.path.basename(name))[0])
+    stem = image_stem(name)
     u = stem.rfind('_')
     if u < 0 or u + 1 == len(stem): return stem
     return stem[:u] if stem[u+1:].isdigit() else stem

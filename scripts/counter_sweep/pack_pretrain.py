@@ -11,12 +11,10 @@
 #   pack_pretrain.py data OUT.npz train=DIR,DIR,... test81=DIR test76=DIR
 #   pack_pretrain.py synth OUT.npz --max-synth N DIR DIR ...
 #   pack_pretrain.py ssl OUT.npz --ssl-scale 0.6 --quality 85 --train DIR,DIR --test DIR,DIR --images DIR,DIR
-import sys, csv, os, re, glob, argparse, cv2, numpy as np
+import sys, csv, os, glob, argparse, cv2, numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from pack import MT64, choose, photo_id  # the same photo split as pack.py and orchard
-def image_stem(name):  # patch file -> the 640x640 crop it was cut from
-    return re.sub(r"_p[0-9]+$", "", os.path.splitext(os.path.basename(name))[0])
+from pack import choose, image_stem, photo_id  # the same photo split as pack.py and orchard
 def cap(im, side):
     s = side / max(im.shape[:2])
     if s < 1:

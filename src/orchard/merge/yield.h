@@ -22,12 +22,10 @@ struct YieldOptions {
   // `orchard side`) and ghosts (clusters whose points land mostly on other
   // clusters' blobs) are dropped: a one-side count profits from chance
   // clusters that make up for missed apples, but in the union of two sides
-  // both sides' chance clusters add up. 4 rather than the 5 chosen on two
-  // rows in the first sessions: with 5 the merged totals ran low (35 rows, exact
-  // masks: within 2% 22 -> 28, mean -1.4 -> -0.7%; 5 unseen rows 3 -> 4 of 5;
-  // 3 points: +0.2% mean but 23 of 35; docs/yield.md). The per-side counts
-  // reported are each side's own count under `orchard side`'s rules, on the
-  // same fruit points: the merge's clusters (5 points) counted a side alone 7% low.
+  // both sides' chance clusters add up. 4 points centre the merged totals
+  // best (5 ran low, 3 high; docs/yield.md, "Four fruit points"). The
+  // per-side counts reported are each side's own count under `orchard side`'s
+  // rules, on the same fruit points: the merge's clusters count a side alone low.
   // The merge's clusters are counted in their views with the most fruit
   // pixels (the study's rule) even with instance masks: a group of clusters
   // seen from both sides holds the larger of the two sides' counts, and the
