@@ -60,6 +60,9 @@ void AddSideOptions(CLI::App* cmd, SideOptions* options) {
   cmd->add_option("--max-lost-fraction", o.clusters.max_lost_fraction,
                   "Remove clusters whose points land mostly on blobs other clusters win (1 = keep all)")
       ->capture_default_str();
+  cmd->add_option("--min-apple-fraction", o.clusters.min_apple_fraction,
+                  "Remove clusters whose largest blob shows less than this fraction of --apple-radius (0 = keep all)")
+      ->capture_default_str();
   cmd->add_option("--merge-shared", o.clusters.merge_shared_fraction,
                   "Join a cluster to a larger one when at least this fraction of its votes fall on blobs both vote "
                   "for (0 = never)")

@@ -42,9 +42,11 @@ struct FruitPointOptions {
   // A point is kept when it lands on fruit in at least this many frames and
   // in at least this fraction of the frames whose image it falls into. A
   // partly hidden apple shows through gaps in the leaves in a third to a half
-  // of the frames; the clusters' own checks (min_views, max_lost_fraction in
-  // side.h) catch most chance pairings this lets through.
-  int min_support = 4;
+  // of the frames; the clusters' own checks (min_views, max_lost_fraction,
+  // min_apple_fraction in side.h) catch most chance pairings this lets
+  // through. 3 since the size check removes the next row's chance pairings
+  // (4 before: apples seen in 3-4 frames got no point; docs/side.md).
+  int min_support = 3;
   double min_support_ratio = 0.3;
   // A frame supports a point only when the point projects within this
   // fraction of the blob's equivalent radius (sqrt(pixels / pi)) of the

@@ -213,6 +213,25 @@ TEST(CountFruitClusters, CountsEachBallOnceAndRemovesFallenAndNextRow) {
   EXPECT_GT(r.single_frame_sum, 3 * r.count);
 }
 
+TEST(CountFruitClusters, BlobsTooSmallForAnAppleAtTheClusterDepthAreRemoved) {
+  std::vector<CameraView> views;
+  for (int i = 0; i < 16; ++i) views.push_back(ViewAt(-0.5 + 0.1 * i));
+  const std::vector<Eigen::Vector3d> balls = {{-0.2, 0, 1.2}, {0.3, -0.1, 1.6}, {0.7, 0.1, 2.0}};
+  const std::vector<FruitFrame> frames = RenderBalls(views, balls, 0.04);
+  ClusterOptions o;  // kept when a blob shows half an apple of 3 cm radius
+  ClusterResult r = CountFruitClusters(views, frames, Plane(), o);
+  EXPECT_EQ(r.count, 3);
+  for (const auto& c : r.clusters) EXPECT_NEAR(c.apple_radius_seen, 0.04, 0.006);  // discs drawn to whole pixels
+  // Blobs showing 4 cm at the clusters' depth where 4.5 cm is the least:
+  // as the next row's apples look when paired by chance into this row.
+  o.min_apple_fraction = 1.5;
+  r = CountFruitClusters(views, frames, Plane(), o);
+  std::map<std::string, int> status;
+  for (const auto& c : r.clusters) status[c.status] += c.count;
+  EXPECT_EQ(r.count, 0);
+  EXPECT_EQ(status["small"], 3);
+}
+
 // The frame's blobs joined into one blob counted as all of them: a
 // detector's blob of touching apples, counted by a counter.
 FruitFrame JoinBlobs(const FruitFrame& f) {
@@ -491,13 +510,14 @@ TEST(CountFruitClusters, AnAppleWhoseCentreTheAppleInFrontHidesIsCounted) {
   EXPECT_EQ(r.count, 1);
 }
 
-TEST(EvidenceStatus, FewViewsAndGhostsAreRemoved) {
+TEST(EvidenceStatus, FewViewsGhostsAndSmallBlobsAreRemoved) {
   ClusterOptions o;
   FruitCluster c;
   c.points = std::vector<int>(8, 0);
   c.count = 1;
   c.views = std::vector<ClusterView>(5, ClusterView{0, 100, 1});
   c.votes_won = 30, c.votes_lost = 20;
+  c.apple_radius_seen = 0.04;
   EXPECT_EQ(EvidenceStatus(c, o), "kept");
   c.views.resize(2);  // wins a blob in two frames only: a chance pairing
   EXPECT_EQ(EvidenceStatus(c, o), "few_views");
@@ -510,6 +530,14 @@ TEST(EvidenceStatus, FewViewsAndGhostsAreRemoved) {
   EXPECT_EQ(EvidenceStatus(c, o), "too_few_points");
   o.min_points = 1, c.count = 0;
   EXPECT_EQ(EvidenceStatus(c, o), "no_views");
+  o.max_lost_fraction = 1, c.count = 1, c.votes_lost = 0;
+  c.apple_radius_seen = 0.02;  // the default apple radius 3 cm, fraction 0.5
+  EXPECT_EQ(EvidenceStatus(c, o), "kept");
+  c.apple_radius_seen = 0.01;  // no blob as large as half an apple at its depth
+  EXPECT_EQ(EvidenceStatus(c, o), "small");
+  o.min_apple_fraction = -1;
+  EXPECT_THROW(o.Check(), Error);
+  o.min_apple_fraction = 0.5;
   o.max_lost_fraction = 0;
   EXPECT_THROW(o.Check(), Error);
 }

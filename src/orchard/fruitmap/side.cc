@@ -126,6 +126,7 @@ void ClusterOptions::Check() const {
   ORCHARD_CHECK_OPTION(min_views >= 1, "min cluster views must be at least 1, got ", min_views);
   ORCHARD_CHECK_OPTION(max_lost_fraction > 0 && max_lost_fraction <= 1, "max lost fraction must be in (0, 1], got ",
                        max_lost_fraction);
+  ORCHARD_CHECK_OPTION(min_apple_fraction >= 0, "min apple fraction must be >= 0, got ", min_apple_fraction);
   ORCHARD_CHECK_OPTION(merge_shared_fraction >= 0 && merge_shared_fraction <= 1,
                        "merge shared fraction must be in [0, 1], got ", merge_shared_fraction);
   ORCHARD_CHECK_OPTION(best_views >= 1, "best views must be at least 1, got ", best_views);
@@ -159,6 +160,7 @@ std::string EvidenceStatus(const FruitCluster& c, const ClusterOptions& o) {
   if (c.count == 0) return "no_views";
   if (static_cast<int>(c.views.size()) < o.min_views) return "few_views";
   if (c.votes_lost > o.max_lost_fraction * (c.votes_won + c.votes_lost)) return "ghost";
+  if (c.apple_radius_seen < o.min_apple_fraction * o.points.apple_radius) return "small";
   return "kept";
 }
 
@@ -253,6 +255,8 @@ ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std
       const size_t v = view_of[best];
       const Blob* b = frames[f].FindBlob(blob);
       c.views[v].pixels += b->pixels;
+      c.apple_radius_seen = std::max(c.apple_radius_seen, std::sqrt(b->pixels / M_PI) *
+                                                              views[f].Depth(c.centre) / views[f].fx);
       c.views[v].count += frames[f].counts[blob - 1];
       c.view_blobs[v].push_back(blob);
     }
@@ -447,7 +451,7 @@ cv::Scalar ClusterColour(int id) {
 void WriteOutputs(const fs::path& out, const std::vector<fs::path>& image_paths, const std::vector<FruitFrame>& frames,
                   const ClusterResult& r, const SideOptions& o) {
   std::ostringstream csv;
-  csv << "id,x,y,z,extent_x,extent_y,extent_z,points,count,status,height,distance,frames,views,votes_won,votes_lost\n";
+  csv << "id,x,y,z,extent_x,extent_y,extent_z,points,count,status,height,distance,frames,views,votes_won,votes_lost,apple_radius\n";
   csv.precision(4);
   csv << std::fixed;
   for (const auto& c : r.clusters) {
@@ -457,7 +461,7 @@ void WriteOutputs(const fs::path& out, const std::vector<fs::path>& image_paths,
         << c.distance << ',';
     for (size_t i = 0; i < c.count_frames.size(); ++i)
       csv << (i ? ";" : "") << image_paths[c.count_frames[i]].filename().string();
-    csv << ',' << c.views.size() << ',' << c.votes_won << ',' << c.votes_lost << '\n';
+    csv << ',' << c.views.size() << ',' << c.votes_won << ',' << c.votes_lost << ',' << c.apple_radius_seen << '\n';
   }
   WriteTextFileAtomic(out / "clusters.csv", csv.str());
   std::ostringstream ply;
