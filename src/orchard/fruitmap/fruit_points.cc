@@ -10,6 +10,9 @@
 #include "orchard/fruitmap/triangulation.h"
 
 namespace orchard {
+
+double EquivalentRadius(const Blob& blob) { return std::sqrt(blob.pixels / M_PI); }
+
 namespace {
 
 Eigen::Vector2d Centre(const FruitFrame& frame, const Blob& b) {
@@ -71,7 +74,7 @@ cv::Point2d FitAppleCentre(const cv::Mat1i& labels, const Blob& blob) {
   for (const auto& contour : contours)
     for (const cv::Point& p : contour) outline.emplace_back(p.x + box.x, p.y + box.y);
   if (outline.size() < 8) return blob.centroid;
-  const double equivalent_radius = std::sqrt(blob.pixels / M_PI);
+  const double equivalent_radius = EquivalentRadius(blob);
   std::mt19937 rng(static_cast<uint32_t>(blob.id * 7919 + blob.pixels));
   std::uniform_int_distribution<size_t> pick(0, outline.size() - 1);
   int best_inliers = 0;
@@ -176,7 +179,7 @@ BlobCentres::BlobCentres(const FruitFrame& frame, int cell_pixels) : frame_(&fra
     const int cx = std::clamp(static_cast<int>(c.x()) / cell_, 0, cols_ - 1);
     const int cy = std::clamp(static_cast<int>(c.y()) / cell_, 0, rows_ - 1);
     grid_[static_cast<size_t>(cy) * cols_ + cx].push_back(static_cast<int>(i));
-    max_radius_ = std::max(max_radius_, std::sqrt(b.pixels / M_PI));
+    max_radius_ = std::max(max_radius_, EquivalentRadius(b));
   }
 }
 
@@ -199,7 +202,7 @@ int BlobCentres::Near(const CameraView& view, const Eigen::Vector3d& X, const Fr
     for (int x = x0; x <= x1; ++x)
       for (int i : grid_[static_cast<size_t>(y) * cols_ + x]) {
         const Blob& b = frame_->blobs[i];
-        const double tol = std::max({o.centre_fraction * std::sqrt(b.pixels / M_PI), apple_px, 2.0});
+        const double tol = std::max({o.centre_fraction * EquivalentRadius(b), apple_px, 2.0});
         const double d = (p - Centre(*frame_, b)).norm();
         if (d <= tol && d < nearest) nearest = d, id = b.id;
       }

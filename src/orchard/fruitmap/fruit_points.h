@@ -27,6 +27,9 @@ struct FruitFrame {
   const Blob* FindBlob(int id) const { return id >= 1 && id <= static_cast<int>(blobs.size()) ? &blobs[id - 1] : nullptr; }
 };
 
+// Radius (pixels) of the disc with the blob's area: its size as an apple.
+double EquivalentRadius(const Blob& blob);
+
 struct FruitPointOptions {
   // Partner frames for the first triangulation: this many frames ahead (a
   // longer baseline gives better depth, a shorter one catches apples seen in

@@ -255,8 +255,8 @@ ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std
       const size_t v = view_of[best];
       const Blob* b = frames[f].FindBlob(blob);
       c.views[v].pixels += b->pixels;
-      c.apple_radius_seen = std::max(c.apple_radius_seen, std::sqrt(b->pixels / M_PI) *
-                                                              views[f].Depth(c.centre) / views[f].fx);
+      c.apple_radius_seen =
+          std::max(c.apple_radius_seen, EquivalentRadius(*b) * views[f].Depth(c.centre) / views[f].fx);
       c.views[v].count += frames[f].counts[blob - 1];
       c.view_blobs[v].push_back(blob);
     }

@@ -126,8 +126,8 @@ struct FruitCluster {
   // Point-on-blob votes for blobs this cluster won, and for blobs another
   // cluster won.
   int votes_won = 0, votes_lost = 0;
-  // Equivalent radius (sqrt(pixels / pi)) of its largest blob, in scene
-  // units at the cluster centre's depth in that frame.
+  // EquivalentRadius of its largest blob, in scene units at the cluster
+  // centre's depth in that frame.
   double apple_radius_seen = 0;
   int count = 0;
   double height = 0;    // centre above the ground (m)
