@@ -51,7 +51,8 @@ void AddCountCommand(CLI::App& app) {
                "cnn: one pass per patch instead of averaging it with its mirror image");
   cmd->add_option("--threads", args->counter.threads, "cnn: LibTorch threads (0 = all cores)")->capture_default_str();
   cmd->add_option("--prior-weight", args->counter.cnn.prior_weight,
-                  "cnn: weigh the counts by the training frequencies to this power (0 = off, 1 = Bayes' rule)")
+                  "cnn: the prior the decision assumes, training frequencies to this power (0 = all counts equally likely, "
+                  "1 = the training data's own prior: more patches right, lower totals)")
       ->capture_default_str();
   cmd->add_option("--criterion", args->criterion, "gmm model selection: coverage (fruit discs cover the blob), bic or aic")->capture_default_str();
   cmd->add_option("--max-fruits", args->counter.gmm.max_fruits, "Largest count per blob")->capture_default_str();

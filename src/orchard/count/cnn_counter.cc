@@ -18,7 +18,7 @@ struct CnnCounter::Impl {
   std::vector<int> input_sizes;
   nn::CounterEnsemble ensemble{nullptr};  // holds the nets of an ensemble file
   CnnCounterOptions options;
-  torch::Tensor prior;  // [1, classes] factors, undefined when prior_weight is 0
+  torch::Tensor prior;  // [1, classes] factors, undefined when the network's prior is the one wanted
 };
 
 void CnnCounterOptions::Check() const {
@@ -36,13 +36,18 @@ CnnCounter::CnnCounter(const std::filesystem::path& model_path, int threads, con
   } catch (const Error&) {
     Fail("model file ", model_path.string(), " has an incomplete counter header");
   }
-  if (options.prior_weight > 0) {
+  // A network trained with class balance power b has learnt the prior
+  // frequencies^(1 - b); the decision wants frequencies^prior_weight, so the
+  // probabilities are weighed by the quotient (logit adjustment).
+  const double balance = nn::CounterBalancePower(header);
+  const double exponent = options.prior_weight - (1 - balance);
+  if (exponent != 0) {
     if (!header.contains("train_class_counts")) Fail("model file ", model_path.string(), " has no class counts for the prior");
     std::vector<double> counts = header.at("train_class_counts").get<std::vector<double>>();
     double total = 0;
     for (double& c : counts) total += c = std::max(c, 1.0);  // a count never seen still gets a chance
     std::vector<float> factors;
-    for (double c : counts) factors.push_back(static_cast<float>(std::pow(c / total, options.prior_weight)));
+    for (double c : counts) factors.push_back(static_cast<float>(std::pow(c / total, exponent)));
     impl_->prior = torch::tensor(factors).unsqueeze(0);
   }
   for (const nn::CounterMember& m : members) impl_->input_sizes.push_back(m.input_size);

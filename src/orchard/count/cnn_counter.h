@@ -17,12 +17,15 @@ struct CnnCounterOptions {
   // held-out photos the average is 0.5-3 points more accurate than one pass
   // for three of four trained counters (models/counter.md). Doubles inference.
   bool flip_average = true;
-  // Multiply the probabilities by the training class frequencies (the model
-  // header's train_class_counts) to this power. Training balances the counts
-  // by up-sampling, so the network assumes all counts equally likely; 1
-  // restores the training photos' prior, where single apples dominate (Bayes'
-  // rule). 0 = off: more patches are right with it, but clusters are counted
-  // lower and totals fall short (measured in models/counter.md).
+  // The prior the decision assumes: the training class frequencies (the
+  // model header's train_class_counts) to this power. 0: every count equally
+  // likely, as a network trained with full class balance (the study's
+  // up-sampling) assumes; 1: the training photos' own prior, where single
+  // apples dominate (Bayes' rule). A network trained with balance power b
+  // learnt frequencies^(1 - b), so its probabilities are weighed by
+  // frequencies^(prior_weight - (1 - b)). 1 gets more patches right, but
+  // clusters are counted lower and totals fall short; 0 keeps the totals
+  // (measured in models/counter.md), and is what the yield pipeline uses.
   double prior_weight = 0;
 
   void Check() const;

@@ -199,6 +199,46 @@ TEST(CnnCounter, PriorWeightMultipliesByClassFrequencies) {
   EXPECT_THROW(CnnCounter(dir / "counter.pt", 1, CnnCounterOptions{false, 2.0}), Error);
 }
 
+TEST(CnnCounter, PriorWeightUndoesTheBalancePowerTrainedWith) {
+  // A network trained on the data's own frequencies (balance power 0) has
+  // learnt their prior: weight 1 leaves it as it is, weight 0 divides it out.
+  const fs::path dir = TempDir("prior_balance");
+  torch::manual_seed(4);
+  nn::ResNet net(nn::ResNetOptions{18, 4, 3, 7});
+  const std::vector<int> class_counts{10, 40, 20, 10, 5, 10, 10};
+  for (const double balance : {0.0, 0.5}) {
+    nn::SaveCheckpoint(*net,
+                       {{"kind", "counter"}, {"architecture", net->options().ToJson()}, {"input_size", 32},
+                        {"train_class_counts", class_counts}, {"balance_power", balance}},
+                       dir / ("b" + std::to_string(balance) + ".pt"));
+  }
+  nn::SaveCheckpoint(*net,
+                     {{"kind", "counter"}, {"architecture", net->options().ToJson()}, {"input_size", 32},
+                      {"train_class_counts", class_counts}},
+                     dir / "full.pt");  // no balance_power: trained before the option, fully balanced
+  cv::Mat patch(30, 30, CV_8UC3);
+  cv::randu(patch, 0, 255);
+  const auto probabilities = [&](const std::string& file, double weight) {
+    return CnnCounter(dir / file, 1, CnnCounterOptions{false, weight}).CountProbabilities({patch})[0];
+  };
+  const auto raw = probabilities("full.pt", 0.0);
+  const auto check = [&](const std::vector<float>& p, double exponent) {
+    std::vector<double> expected;
+    double sum = 0;
+    for (int k = 0; k < 7; ++k) sum += expected.emplace_back(raw[k] * std::pow(class_counts[k], exponent));
+    for (int k = 0; k < 7; ++k) EXPECT_NEAR(p[k], expected[k] / sum, 1e-5) << "count " << k;
+  };
+  check(probabilities("b0.000000.pt", 1.0), 0);
+  check(probabilities("b0.000000.pt", 0.0), -1);
+  check(probabilities("b0.500000.pt", 0.0), -0.5);
+  check(probabilities("b0.500000.pt", 0.5), 0);
+  // An ensemble of members trained with different powers assumes no one prior.
+  EXPECT_THROW(nn::WriteCounterEnsemble({dir / "b0.000000.pt", dir / "full.pt"}, dir / "mixed.pt"), Error);
+  nn::WriteCounterEnsemble({dir / "b0.000000.pt", dir / "b0.000000.pt"}, dir / "same.pt");
+  EXPECT_EQ(nn::CounterBalancePower(nn::ReadCheckpointHeader(dir / "same.pt", "counter")), 0.0);
+  check(probabilities("same.pt", 0.0), -1);
+}
+
 TEST(CnnCounter, EnsembleAveragesItsMembers) {
   const fs::path dir = TempDir("ensemble");
   std::vector<fs::path> files;

@@ -24,6 +24,18 @@ std::vector<CounterMember> CounterMembers(const nlohmann::json& header) {
   return members;
 }
 
+double CounterBalancePower(const nlohmann::json& header) {
+  const auto power = [](const nlohmann::json& h) {
+    return h.contains("balance_power") && h.at("balance_power").is_number() ? h.at("balance_power").get<double>() : 1.0;
+  };
+  if (!header.contains("members")) return power(header);
+  if (!header.at("members").is_array() || header.at("members").empty()) Fail("counter ensemble without members");
+  const double first = power(header.at("members").front());
+  for (const nlohmann::json& m : header.at("members"))
+    if (power(m) != first) Fail("counter ensemble members trained with different class balance powers");
+  return first;
+}
+
 CounterEnsembleImpl::CounterEnsembleImpl(const std::vector<CounterMember>& members) {
   for (size_t i = 0; i < members.size(); ++i) {
     ResNet net(members[i].architecture);
@@ -59,6 +71,11 @@ void WriteCounterEnsemble(const std::vector<fs::path>& models, const fs::path& o
     }
     described.push_back(member);
   }
+  for (const nlohmann::json& m : described)
+    if (CounterBalancePower(m) != CounterBalancePower(described[0]))
+      Fail("counter ensemble: ", m.at("source").get<std::string>(), " was trained with class balance power ",
+           CounterBalancePower(m), ", ", described[0].at("source").get<std::string>(), " with ",
+           CounterBalancePower(described[0]), "; give counters trained alike");
   CounterEnsemble ensemble(members);
   for (size_t i = 0; i < models.size(); ++i) LoadCheckpointWeights(*ensemble->nets[i], models[i]);
   // The first member's architecture and input stand at the top, as in a single counter's header.
