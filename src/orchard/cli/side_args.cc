@@ -107,6 +107,10 @@ void AddFruitOptions(CLI::App* cmd, FruitArgs* a) {
   cmd->add_option("--min-apple-posterior", a->gmm_min_apple_posterior,
                   "gmm: a superpixel is apple when the KL rule says so and its apple posterior is at least this")
       ->capture_default_str();
+  cmd->add_option("--counter-prior-weight", a->counter_prior_weight,
+                  "cnn: the prior the decision assumes, training frequencies to this power (0 = all counts equally "
+                  "likely; 1 = the training data's own: more clusters right, lower totals)")
+      ->capture_default_str();
 }
 
 void SetUpFruit(const FruitArgs& a, const std::string& masks, FruitTools* tools, SideInputs* in) {
@@ -142,6 +146,7 @@ void SetUpFruit(const FruitArgs& a, const std::string& masks, FruitTools* tools,
     choice.method = a.counter;
     choice.model = a.counter_model;
     choice.threads = a.threads;
+    choice.cnn.prior_weight = a.counter_prior_weight;
     tools->counter = MakeCounter(choice);
   }
   in->counter = tools->counter.get();
@@ -149,6 +154,8 @@ void SetUpFruit(const FruitArgs& a, const std::string& masks, FruitTools* tools,
   if (a.counter == "cnn" || !a.counter_model.empty()) {
     const fs::path model = a.counter_model.empty() ? DefaultCounterModel() : fs::path(a.counter_model);
     in->counter_name += ":" + model.string() + "@" + FileFingerprint(model);
+    if (a.counter == "cnn" && a.counter_prior_weight != CnnCounterOptions().prior_weight)
+      in->counter_name += " prior_weight=" + std::to_string(a.counter_prior_weight);
   }
 }
 

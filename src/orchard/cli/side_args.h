@@ -5,6 +5,7 @@
 #include <memory>
 #include <string>
 
+#include "orchard/count/cnn_counter.h"
 #include "orchard/count/counter.h"
 #include "orchard/detect/detector.h"
 #include "orchard/detect/detector_factory.h"
@@ -35,6 +36,8 @@ struct FruitArgs {
   // 71 apples of 136 visible without it, 59 with 0.05, 48 with 0.2), and the
   // multi-view support check removes specks instead.
   double gmm_min_apple_posterior = 0;
+  // cnn: the prior the counter's decision assumes (CnnCounterOptions).
+  double counter_prior_weight = CnnCounterOptions().prior_weight;
 };
 
 // The detector and counter objects a SideInputs points to.
