@@ -25,7 +25,8 @@ struct CnnCounterOptions {
   // learnt frequencies^(1 - b), so its probabilities are weighed by
   // frequencies^(prior_weight - (1 - b)). 1 gets more patches right, but
   // clusters are counted lower and totals fall short; 0 keeps the totals
-  // (measured in models/counter.md), and is what the yield pipeline uses.
+  // (measured in models/counter.md), and is the pipeline's default too
+  // (`--counter-prior-weight`).
   double prior_weight = 0;
 
   void Check() const;

@@ -71,11 +71,12 @@ void WriteCounterEnsemble(const std::vector<fs::path>& models, const fs::path& o
     }
     described.push_back(member);
   }
+  const double balance = CounterBalancePower(described[0]);
   for (const nlohmann::json& m : described)
-    if (CounterBalancePower(m) != CounterBalancePower(described[0]))
+    if (CounterBalancePower(m) != balance)
       Fail("counter ensemble: ", m.at("source").get<std::string>(), " was trained with class balance power ",
-           CounterBalancePower(m), ", ", described[0].at("source").get<std::string>(), " with ",
-           CounterBalancePower(described[0]), "; give counters trained alike");
+           CounterBalancePower(m), ", ", described[0].at("source").get<std::string>(), " with ", balance,
+           "; give counters trained alike");
   CounterEnsemble ensemble(members);
   for (size_t i = 0; i < models.size(); ++i) LoadCheckpointWeights(*ensemble->nets[i], models[i]);
   // The first member's architecture and input stand at the top, as in a single counter's header.
