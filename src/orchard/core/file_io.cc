@@ -116,8 +116,51 @@ std::vector<fs::path> ListImages(const fs::path& dir) {
       images.push_back(entry.path());
     }
   }
-  std::sort(images.begin(), images.end());
+  std::sort(images.begin(), images.end(), [](const fs::path& a, const fs::path& b) {
+    return NaturalLess(a.filename().string(), b.filename().string());
+  });
   return images;
+}
+
+bool NaturalLess(const std::string& a, const std::string& b) {
+  const auto digit = [](char c) { return c >= '0' && c <= '9'; };
+  size_t i = 0, j = 0;
+  while (i < a.size() && j < b.size()) {
+    if (digit(a[i]) && digit(b[j])) {
+      size_t ie = i, je = j;
+      while (ie < a.size() && digit(a[ie])) ++ie;
+      while (je < b.size() && digit(b[je])) ++je;
+      // Compare the runs' values: skip leading zeros, then length, then digits.
+      size_t iz = i, jz = j;
+      while (iz + 1 < ie && a[iz] == '0') ++iz;
+      while (jz + 1 < je && b[jz] == '0') ++jz;
+      if (ie - iz != je - jz) return ie - iz < je - jz;
+      const int c = a.compare(iz, ie - iz, b, jz, je - jz);
+      if (c != 0) return c < 0;
+      if (ie - i != je - j) return ie - i < je - j;  // same value: fewer leading zeros first
+      i = ie, j = je;
+    } else {
+      if (a[i] != b[j]) return static_cast<unsigned char>(a[i]) < static_cast<unsigned char>(b[j]);
+      ++i, ++j;
+    }
+  }
+  return a.size() - i < b.size() - j;
+}
+
+std::string PadDigitRuns(const std::string& name, int width) {
+  std::string out;
+  for (size_t i = 0; i < name.size();) {
+    if (name[i] < '0' || name[i] > '9') {
+      out += name[i++];
+      continue;
+    }
+    size_t e = i;
+    while (e < name.size() && name[e] >= '0' && name[e] <= '9') ++e;
+    if (static_cast<int>(e - i) < width) out.append(static_cast<size_t>(width) - (e - i), '0');
+    out.append(name, i, e - i);
+    i = e;
+  }
+  return out;
 }
 
 std::string FileFingerprint(const fs::path& path) {

@@ -39,8 +39,20 @@ void WriteImageAtomic(const fs::path& path, const cv::Mat& image);
 cv::Mat ReadImage(const fs::path& path, int flags = 1 /* cv::IMREAD_COLOR */);
 
 // Image files (.png .jpg .jpeg .bmp .tif .tiff, any case) directly in `dir`,
-// sorted by name. Throws when `dir` is not a folder.
+// in NaturalLess order of their names. Throws when `dir` is not a folder.
 std::vector<fs::path> ListImages(const fs::path& dir);
+
+// Name order with runs of digits compared as numbers ("frame_9" before
+// "frame_10"), so frames exported without leading zeros (ffmpeg's
+// frame_%d.png) stay in sequence; equal numbers with more leading zeros come
+// later, other characters compare bytewise. Agrees with plain string order
+// on zero-padded names.
+bool NaturalLess(const std::string& a, const std::string& b);
+
+// `name` with every run of digits shorter than `width` padded with leading
+// zeros ("frame_7.png" -> "frame_000007.png"): names whose plain string
+// order is their natural order, for tools that sort by name (COLMAP).
+std::string PadDigitRuns(const std::string& name, int width = 6);
 
 // True when the extension is one of the image extensions above.
 bool IsImageFile(const fs::path& path);

@@ -57,6 +57,29 @@ TEST(FileIo, ReadImageErrors) {
   EXPECT_THROW(ListImages(dir / "nope"), Error);
 }
 
+TEST(FileIo, NaturalOrderOfFrameNames) {
+  EXPECT_TRUE(NaturalLess("frame_9.png", "frame_10.png"));
+  EXPECT_FALSE(NaturalLess("frame_10.png", "frame_9.png"));
+  EXPECT_TRUE(NaturalLess("frame_0009.png", "frame_0010.png"));  // padded: plain order
+  EXPECT_TRUE(NaturalLess("a2b7", "a2b10"));
+  EXPECT_TRUE(NaturalLess("row1_frame_99", "row2_frame_1"));
+  EXPECT_TRUE(NaturalLess("frame_7", "frame_007"));  // same number: fewer zeros first
+  EXPECT_FALSE(NaturalLess("frame_7", "frame_7"));
+  EXPECT_TRUE(NaturalLess("frame", "frame_1"));
+  EXPECT_TRUE(NaturalLess("Frame_2", "frame_1"));  // other characters bytewise
+  EXPECT_EQ(PadDigitRuns("frame_7.png"), "frame_000007.png");
+  EXPECT_EQ(PadDigitRuns("row2_f1234567"), "row000002_f1234567");
+  EXPECT_EQ(PadDigitRuns("f12", 3), "f012");
+  const fs::path dir = TempDir("natural");
+  const cv::Mat m(2, 2, CV_8UC3, cv::Scalar(1, 2, 3));
+  for (int i : {10, 2, 1, 100, 11}) WriteImageAtomic(dir / ("frame_" + std::to_string(i) + ".png"), m);
+  std::vector<std::string> names;
+  for (const auto& p : ListImages(dir)) names.push_back(p.filename().string());
+  EXPECT_EQ(names, (std::vector<std::string>{"frame_1.png", "frame_2.png", "frame_10.png", "frame_11.png",
+                                             "frame_100.png"}));
+  fs::remove_all(dir);
+}
+
 TEST(Box, IoUKnownValues) {
   Box a{0, 0, 10, 10}, b{5, 0, 15, 10};
   EXPECT_DOUBLE_EQ(IoU(a, b), 50.0 / 150.0);

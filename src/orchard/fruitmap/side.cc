@@ -342,6 +342,7 @@ void SideOptions::Check() const {
   frames.Check();
   colmap.Check();
   ground.Check();
+  reconstruction_check.Check();
   clusters.Check();
   ORCHARD_CHECK_OPTION(camera_height > 0, "camera height must be positive, got ", camera_height);
   ORCHARD_CHECK_OPTION(draw_every >= 0, "draw every must be >= 0, got ", draw_every);
@@ -424,7 +425,13 @@ FruitFrame FrameFruit(const SideInputs& in, const fs::path& image_path, const fs
     const FrameDetection d = in.detector->Detect(image);
     frame = FruitFromInstanceMask(InstanceMask(d));
   } else {
-    const fs::path mask_path = in.masks / (stem + ".png");
+    fs::path mask_path = in.masks / (stem + ".png");
+    if (!fs::exists(mask_path))  // frames renamed with padded numbers (SelectFrames), masks not
+      for (const auto& p : ListImages(in.masks))
+        if (PadDigitRuns(p.stem().string()) == PadDigitRuns(stem)) {
+          mask_path = p;
+          break;
+        }
     if (!fs::exists(mask_path)) Fail("no instance mask for frame ", image_path.filename().string(), " (", mask_path.string(), ")");
     const cv::Mat mask = ReadImage(mask_path, cv::IMREAD_UNCHANGED);
     if (mask.size() != image.size() || mask.channels() != 1)
@@ -587,6 +594,8 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
     ScaleViews(scale, &views);
     ground.d *= scale;
   }
+  ReconstructionCheck check = CheckReconstruction(views, ground, &model, o.reconstruction_check);
+  for (const auto& w : check.warnings) spdlog::warn("reconstruction: {}", w);
   s.poses_s = stopwatch.Lap();
   // Fruit per frame (cached).
   std::vector<fs::path> image_paths;
@@ -611,6 +620,13 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   s.one_side_count =
       o.one_side_clusters ? CountFruitClusters(views, frames, ground, resolved(*o.one_side_clusters), r.points).count
                           : r.count;
+  {
+    std::vector<Eigen::Vector3d> fruit;
+    for (const auto& p : r.points) fruit.push_back(p.xyz);
+    const size_t before = check.warnings.size();
+    CheckFruitAboveGround(fruit, ground, o.reconstruction_check, &check);
+    for (size_t i = before; i < check.warnings.size(); ++i) spdlog::warn("reconstruction: {}", check.warnings[i]);
+  }
   s.clusters_s = stopwatch.Lap();
   WriteOutputs(in.out, image_paths, frames, r, o);
   s.outputs_s = stopwatch.Lap();
@@ -630,6 +646,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   if (!unregistered.empty())
     warnings.push_back(std::to_string(unregistered.size()) + " of " + std::to_string(num_frames) +
                        " frames have no pose and are left out");
+  for (const auto& w : check.warnings) warnings.push_back("reconstruction: " + w);
   if (s.clusters_kept == 0) warnings.push_back("no fruit cluster kept: the count is not meaningful");
   const Json j = {
       {"count", s.count},
@@ -648,6 +665,13 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
                      {"along", {r.row_along.x(), r.row_along.y(), r.row_along.z()}},
                      {"across", {r.row_across.x(), r.row_across.y(), r.row_across.z()}},
                      {"up", {r.row_up.x(), r.row_up.y(), r.row_up.z()}}}},
+      {"reconstruction", {{"path_length", check.path_length}, {"path_extent", check.path_extent},
+                          {"median_step", check.median_step}, {"max_step_ratio", check.max_step_ratio},
+                          {"backward_steps", check.backward_steps}, {"bend", check.bend},
+                          {"height_median", check.height_median}, {"height_spread", check.height_spread},
+                          {"view_angle_deg", check.view_angle_deg},
+                          {"reprojection_error_px", check.reprojection_error_px},
+                          {"fruit_below_ground", check.fruit_below_ground}}},
       {"row_distance", r.row_distance},
       {"depth_cutoff", r.depth_cutoff},
       {"depth_cutoff_from", r.depth_cutoff_from_gap ? "gap" : "margin"},

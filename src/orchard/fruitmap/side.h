@@ -20,6 +20,7 @@
 #include "orchard/sfm/colmap_runner.h"
 #include "orchard/sfm/frame_selection.h"
 #include "orchard/sfm/ground_plane.h"
+#include "orchard/sfm/reconstruction_check.h"
 
 namespace orchard {
 
@@ -189,6 +190,8 @@ struct SideOptions {
   FrameSelectionOptions frames;
   ColmapRunnerOptions colmap;
   GroundPlaneOptions ground;
+  // Signs of a broken reconstruction, reported as warnings (side.json).
+  ReconstructionCheckOptions reconstruction_check;
   ClusterOptions clusters;
   // Give every frame the centres of circles fitted to its blobs' outlines
   // (FitAppleCentres) for the 3D stage to triangulate instead of the blob

@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "orchard/core/error.h"
+#include "orchard/core/file_io.h"
 
 namespace orchard {
 
@@ -51,7 +52,7 @@ std::vector<CameraView> ViewsFromColmapModel(const ColmapModel& model) {
     v.t = image.tvec;
     views.push_back(std::move(v));
   }
-  std::sort(views.begin(), views.end(), [](const CameraView& a, const CameraView& b) { return a.name < b.name; });
+  std::sort(views.begin(), views.end(), [](const CameraView& a, const CameraView& b) { return NaturalLess(a.name, b.name); });
   return views;
 }
 

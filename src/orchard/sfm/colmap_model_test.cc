@@ -5,6 +5,7 @@
 #include "orchard/core/error.h"
 #include "orchard/core/file_io.h"
 #include "orchard/core/test_util.h"
+#include "orchard/sfm/camera_view.h"
 
 namespace orchard {
 namespace {
@@ -55,6 +56,23 @@ TEST(ColmapModel, ReadsKnownValues) {
   EXPECT_EQ(model.points3D.at(7).r, 255);
   EXPECT_EQ(model.FindImage("b.png"), &model.images.at(2));
   EXPECT_EQ(model.FindImage("c.png"), nullptr);
+}
+
+TEST(ColmapModel, ViewsInFrameOrderEvenWithoutLeadingZeros) {
+  ColmapModel model;
+  model.cameras[1] = ColmapCamera{1, "PINHOLE", 960, 540, {572.5, 572.5, 480, 270}};
+  int id = 1;
+  for (const char* name : {"frame_10.png", "frame_9.png", "frame_1.png", "frame_100.png"}) {
+    ColmapImage image;
+    image.image_id = id;
+    image.camera_id = 1;
+    image.name = name;
+    image.tvec = Eigen::Vector3d(id, 0, 0);
+    model.images[id++] = image;
+  }
+  std::vector<std::string> names;
+  for (const auto& v : ViewsFromColmapModel(model)) names.push_back(v.name);
+  EXPECT_EQ(names, (std::vector<std::string>{"frame_1.png", "frame_9.png", "frame_10.png", "frame_100.png"}));
 }
 
 TEST(ColmapModel, RoundTripIsExact) {

@@ -66,5 +66,22 @@ TEST(FrameSelection, StepMotionAndTooFewFrames) {
   fs::remove_all(dir);
 }
 
+TEST(FrameSelection, FramesWithoutLeadingZerosKeepTheirOrder) {
+  // ffmpeg's frame_%d.png: 1, 2, ..., 12. Plain string order would take
+  // frame_10 after frame_1; the frames are read in natural order and written
+  // with padded numbers, the order COLMAP's sequential matcher takes.
+  const fs::path dir = TempDir("unpadded");
+  for (int i = 1; i <= 12; ++i)
+    cv::imwrite((dir / ("frame_" + std::to_string(i) + ".png")).string(), cv::Mat3b(8, 8, cv::Vec3b(i, i, i)));
+  FrameSelectionOptions o;
+  o.step = 5;
+  const auto kept = SelectFrames(dir, o, dir / "out");
+  EXPECT_EQ(kept, (std::vector<std::string>{"frame_000001.png", "frame_000006.png", "frame_000011.png"}));
+  EXPECT_EQ(cv::imread((dir / "out" / "frame_000011.png").string()).at<cv::Vec3b>(0, 0)[0], 11);
+  // Padded names are written as they are.
+  EXPECT_EQ(SelectFrames(dir / "out", FrameSelectionOptions{}, dir / "again"), kept);
+  fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace orchard

@@ -4,6 +4,7 @@
 
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
+#include <spdlog/spdlog.h>
 
 #include "orchard/core/error.h"
 #include "orchard/core/file_io.h"
@@ -55,6 +56,16 @@ std::vector<std::string> SelectFrames(const fs::path& input, const FrameSelectio
   FrameSourceOptions source_options;
   if (options.method == "step") source_options.step = options.step;
   FrameSource source(input, source_options);
+  // Frames named without leading zeros (frame_9, frame_10) are read in their
+  // natural order, but COLMAP's sequential matcher takes them in plain string
+  // order: write them with padded numbers so that both orders agree.
+  bool pad = false;
+  if (fs::is_directory(input)) {
+    std::vector<std::string> listed;
+    for (const auto& p : ListImages(input)) listed.push_back(p.filename().string());
+    pad = !std::is_sorted(listed.begin(), listed.end());
+    if (pad) spdlog::info("frames of {} are numbered without leading zeros: written with padded numbers", input.string());
+  }
   std::vector<std::string> names;
   Frame frame;
   cv::Mat last_kept;
@@ -74,7 +85,8 @@ std::vector<std::string> SelectFrames(const fs::path& input, const FrameSelectio
       const double s = std::min(1.0, 640.0 / frame.image.cols);
       cv::resize(frame.image, last_kept, cv::Size(), s, s, cv::INTER_AREA);
     }
-    const std::string name = fs::path(frame.name).stem().string() + ".png";
+    const std::string stem = fs::path(frame.name).stem().string();
+    const std::string name = (pad ? PadDigitRuns(stem) : stem) + ".png";
     const fs::path path = out_dir / name;
     if (!fs::exists(path)) WriteImageAtomic(path, frame.image);
     names.push_back(name);

@@ -1,0 +1,82 @@
+// Signs that a side's reconstruction is broken, so that a count from it is
+// never reported without saying so. A row video is a walk along the row: the
+// camera path is nearly straight, moves forward in steady steps, keeps its
+// height above the ground and looks across the row. COLMAP can register every
+// frame and still break these (a sequence folded back on itself in repetitive
+// foliage, frames out of order, a jump where frames are missing, a ground
+// plane fitted to the wrong surface, which also gives the wrong scale).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "orchard/sfm/camera_view.h"
+#include "orchard/sfm/colmap_model.h"
+#include "orchard/sfm/ground_plane.h"
+
+namespace orchard {
+
+struct ReconstructionCheckOptions {
+  // A step between consecutive frames longer than this many times the median
+  // step is a jump (frames missing, or the reconstruction broke there).
+  // Synthetic rows, true poses and COLMAP: at most 1.3.
+  double max_step_ratio = 4;
+  // A step that goes back along the path by more than half the median step
+  // (and more than 1% of the path's extent) is a backward step: a folded
+  // reconstruction or frames out of order. Warn when there is any.
+  int max_backward_steps = 0;
+  // Largest distance of a camera from the straight line through the path, in
+  // the ground plane, as a fraction of the path's extent along the row.
+  double max_bend = 0.1;
+  // Spread of the cameras' heights above the ground plane (5th to 95th
+  // percentile) as a fraction of their median: a ground plane fitted to the
+  // wrong surface, or tilted against the path.
+  double max_height_spread = 0.2;
+  // Largest angle (degrees) between the cameras' mean viewing direction and
+  // the direction across the path, in the ground plane: the method films the
+  // row from the side.
+  double max_view_angle_deg = 45;
+  // Mean reprojection error of the sparse points (pixels); COLMAP's own
+  // filter keeps points up to 4 px, good sequences average below 1.
+  double max_reprojection_error_px = 2;
+  // Shortest camera path (m, after scaling) worth a reconstruction.
+  double min_path_length = 1.0;
+  // Fruit points more than `below_ground_margin` (m) below the ground plane:
+  // nothing lies below the ground, so more than this fraction of them means
+  // the plane is wrong, e.g. tilted about the path, which the cameras'
+  // heights do not show (seed 12's back with --ground-below-penalty 0: 33%;
+  // good planes: exact masks 0-0.03%, the U-Net's chance points about 1%).
+  double below_ground_margin = 0.1;
+  double max_fruit_below_ground = 0.05;
+  void Check() const;
+};
+
+struct ReconstructionCheck {
+  int frames = 0;
+  double path_length = 0;     // sum of the steps (m, in the views' units)
+  double path_extent = 0;     // first to last camera along the path's axis
+  double median_step = 0;
+  double max_step_ratio = 0;  // longest step / median step
+  std::string longest_step_after;  // frame name before the longest step
+  int backward_steps = 0;
+  double bend = 0;            // largest distance off the line / extent
+  double height_median = 0;   // cameras' height above the ground
+  double height_spread = 0;   // (95th - 5th percentile) / median
+  double view_angle_deg = 0;  // mean viewing direction against across-the-path
+  double reprojection_error_px = -1;  // mean over the sparse points; -1 without points
+  double fruit_below_ground = -1;     // fraction of the fruit points; -1 before CheckFruitAboveGround
+  std::vector<std::string> warnings;  // one line each; empty when nothing looks wrong
+};
+
+// Checks `views` (in frame order) against `ground`, both in metric units (the
+// side's scale applied). `model` may be null or hold no 3D points (given
+// poses); the reprojection check is then skipped.
+ReconstructionCheck CheckReconstruction(const std::vector<CameraView>& views, const Plane& ground,
+                                        const ColmapModel* model, const ReconstructionCheckOptions& options);
+
+// Adds the share of `fruit_points` (metric, like `ground`) below the ground
+// plane to `check`, and a warning when it is too large.
+void CheckFruitAboveGround(const std::vector<Eigen::Vector3d>& fruit_points, const Plane& ground,
+                           const ReconstructionCheckOptions& options, ReconstructionCheck* check);
+
+}  // namespace orchard
