@@ -82,6 +82,7 @@ void AddDemoCommand(CLI::App& app) {
     line("unmerged: sum of the two sides", y.sum_of_sides);
     std::printf("\nalignment of the sides: %d clusters matched, residual %.1f cm\n", y.registration.matched,
                 100 * y.registration.residual);
+    for (const auto& w : y.warnings) std::printf("warning: %s\n", w.c_str());
     std::printf("outputs: %s (yield.json, report.html, clusters.csv, row.ply), row: %s\n",
                 (out / "yield").string().c_str(), (out / "row").string().c_str());
   });

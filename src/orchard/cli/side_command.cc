@@ -40,6 +40,7 @@ void AddSideCommand(CLI::App& app) {
     const SideSummary s = RunSide(in, a->options);
     std::printf("count %d (single-frame sum %d), %d clusters kept, %d removed, %d frames -> %s\n", s.count,
                 s.single_frame_sum, s.clusters_kept, s.clusters_removed, s.frames_used, a->out.c_str());
+    for (const auto& w : s.warnings) std::printf("warning: %s\n", w.c_str());
   });
 }
 

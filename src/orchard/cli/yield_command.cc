@@ -77,6 +77,7 @@ void AddYieldCommand(CLI::App& app) {
     const YieldSummary y = RunYield(in, a->options);
     std::printf("row: %d apples (front %d, back %d, seen from both sides %.1f; unmerged sum %d) -> %s/yield.json\n",
                 y.total, y.front, y.back, y.shared, y.sum_of_sides, a->out.c_str());
+    for (const auto& w : y.warnings) std::printf("warning: %s\n", w.c_str());
     if (!in.calibration.empty())
       std::printf("calibrated: %d apples (x%.3f, %s)\n", y.calibrated_total, y.calibration_factor,
                   in.calibration.string().c_str());

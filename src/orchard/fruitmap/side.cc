@@ -648,6 +648,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
                        " frames have no pose and are left out");
   for (const auto& w : check.warnings) warnings.push_back("reconstruction: " + w);
   if (s.clusters_kept == 0) warnings.push_back("no fruit cluster kept: the count is not meaningful");
+  for (const auto& w : warnings) s.warnings.push_back(w.get<std::string>());
   const Json j = {
       {"count", s.count},
       {"one_side_count", s.one_side_count},

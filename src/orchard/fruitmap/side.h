@@ -251,6 +251,7 @@ struct SideSummary {
   // writing the outputs.
   double poses_s = 0, fruit_s = 0, clusters_s = 0, outputs_s = 0;
   std::vector<fs::path> frame_paths;  // the frames used, in sequence order
+  std::vector<std::string> warnings;  // as in side.json
 };
 
 // Runs the side end to end and writes side.json, clusters.csv, fruit.ply,

@@ -56,6 +56,15 @@ TEST_F(SideTest, CountsTheVisibleApplesOnceFromTruePosesAndMasks) {
   const auto side = nlohmann::json::parse(ReadTextFile(*dir_ / "out/side.json"));
   EXPECT_EQ(side.at("count").get<int>(), s.count);
   EXPECT_EQ(side.at("scale").get<double>(), 1.0);  // true poses are metric
+  // The generator's path passes the reconstruction checks: 12.5 cm steps,
+  // 1.5 m up, no fruit below the ground.
+  EXPECT_TRUE(s.warnings.empty()) << s.warnings.front();
+  const auto& check = side.at("reconstruction");
+  EXPECT_NEAR(check.at("median_step").get<double>(), 0.125, 0.01);
+  EXPECT_NEAR(check.at("height_median").get<double>(), 1.5, 0.02);
+  EXPECT_EQ(check.at("backward_steps").get<int>(), 0);
+  EXPECT_EQ(check.at("reprojection_error_px").get<double>(), -1);  // given poses: no sparse points
+  EXPECT_LT(check.at("fruit_below_ground").get<double>(), 0.01);
   // A rerun resumes from the cached detections and gives the same count.
   EXPECT_TRUE(fs::exists(*dir_ / "out/detections/frame_0000.json"));
   EXPECT_EQ(RunSide(Inputs("out"), o).count, s.count);

@@ -260,6 +260,7 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
   if (o.poses_registered && y.registration.matched < o.registration.min_matched)
     warnings.push_back("the given poses match only " + std::to_string(y.registration.matched) +
                        " clusters across the sides: are they really in one frame?");
+  for (const auto& w : warnings) y.warnings.push_back(w.get<std::string>());
 
   timings["merge"] = stopwatch.Lap();
   Json j = {

@@ -103,6 +103,7 @@ struct YieldSummary {
   // With a calibration: total x its factor, rounded (0 without one).
   int calibrated_total = 0;
   double calibration_factor = 0;
+  std::vector<std::string> warnings;  // as in yield.json, each side's prefixed with its name
 };
 
 // Runs both sides (resuming from their caches), registers and merges them,
