@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <map>
 #include <set>
@@ -575,11 +576,12 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   // Ground plane and scale.
   Plane ground;
   std::string ground_source;
+  std::vector<Eigen::Vector3d> pts, centres;  // sparse points and cameras in the model's frame
+  const std::vector<CameraView> model_views = views;
   if (in.ground) {
     ground = *in.ground;
     ground_source = "given";
   } else {
-    std::vector<Eigen::Vector3d> pts, centres;
     for (const auto& [id, p] : model.points3D) pts.push_back(p.xyz);
     for (const auto& v : views) centres.push_back(v.Center());
     if (static_cast<int>(pts.size()) < o.ground.min_inliers)
@@ -588,12 +590,16 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
     ground = FitGroundPlane(pts, centres, MeanCameraUp(views), o.ground, &inliers);
     ground_source = "fitted to " + std::to_string(inliers) + " of " + std::to_string(pts.size()) + " sparse points";
   }
+  // The views scaled to metres over `plane` (model frame), and the plane with them.
+  const auto metric = [&](Plane plane, std::vector<CameraView>* scaled, double* s) {
+    *scaled = model_views;
+    *s = rescale ? ScaleFromCameraHeight(plane, *scaled, o.camera_height) : 1;
+    ScaleViews(*s, scaled);
+    plane.d *= *s;
+    return plane;
+  };
   double scale = 1;
-  if (rescale) {
-    scale = ScaleFromCameraHeight(ground, views, o.camera_height);
-    ScaleViews(scale, &views);
-    ground.d *= scale;
-  }
+  ground = metric(ground, &views, &scale);
   ReconstructionCheck check = CheckReconstruction(views, ground, &model, o.reconstruction_check);
   for (const auto& w : check.warnings) spdlog::warn("reconstruction: {}", w);
   s.poses_s = stopwatch.Lap();
@@ -616,17 +622,44 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
     return c;
   };
   const ClusterOptions clusters = resolved(o.clusters);
-  const ClusterResult r = CountFruitClusters(views, frames, ground, clusters);
+  ClusterResult r = CountFruitClusters(views, frames, ground, clusters);
+  const auto fruit_of = [](const ClusterResult& result) {
+    std::vector<Eigen::Vector3d> fruit;
+    for (const auto& p : result.points) fruit.push_back(p.xyz);
+    return fruit;
+  };
+  size_t logged = check.warnings.size();  // the path's, logged above
+  CheckFruitAboveGround(fruit_of(r), ground, o.reconstruction_check, &check);
+  if (check.fruit_below_ground > o.reconstruction_check.max_fruit_below_ground && !in.ground &&
+      o.refit_ground_below_fruit) {
+    std::vector<Eigen::Vector3d> fruit = fruit_of(r);
+    for (auto& X : fruit) X /= scale;  // back to the model's frame
+    int inliers = 0;
+    const Plane refit = FitGroundPlane(pts, centres, MeanCameraUp(model_views), o.ground, &inliers, &fruit, 1.0);
+    std::vector<CameraView> refit_views;
+    double refit_scale = 1;
+    const Plane refit_ground = metric(refit, &refit_views, &refit_scale);
+    ClusterResult refit_r = CountFruitClusters(refit_views, frames, refit_ground, clusters);
+    ReconstructionCheck refit_check = CheckReconstruction(refit_views, refit_ground, &model, o.reconstruction_check);
+    CheckFruitAboveGround(fruit_of(refit_r), refit_ground, o.reconstruction_check, &refit_check);
+    if (refit_check.fruit_below_ground < check.fruit_below_ground) {
+      char note[200];
+      std::snprintf(note, sizeof note,
+                    "the ground plane was fitted again below the fruit (%.0f%% of the fruit points lay below the "
+                    "first fit; scale %.3g -> %.3g)",
+                    100 * check.fruit_below_ground, scale, refit_scale);
+      refit_check.warnings.insert(refit_check.warnings.begin(), note);
+      ground = refit_ground, views = refit_views, scale = refit_scale, r = std::move(refit_r);
+      check = std::move(refit_check);
+      logged = 0;
+      ground_source = "fitted again to " + std::to_string(inliers) + " of " + std::to_string(pts.size()) +
+                      " sparse points, below the fruit";
+    }
+  }
+  for (size_t i = logged; i < check.warnings.size(); ++i) spdlog::warn("reconstruction: {}", check.warnings[i]);
   s.one_side_count =
       o.one_side_clusters ? CountFruitClusters(views, frames, ground, resolved(*o.one_side_clusters), r.points).count
                           : r.count;
-  {
-    std::vector<Eigen::Vector3d> fruit;
-    for (const auto& p : r.points) fruit.push_back(p.xyz);
-    const size_t before = check.warnings.size();
-    CheckFruitAboveGround(fruit, ground, o.reconstruction_check, &check);
-    for (size_t i = before; i < check.warnings.size(); ++i) spdlog::warn("reconstruction: {}", check.warnings[i]);
-  }
   s.clusters_s = stopwatch.Lap();
   WriteOutputs(in.out, image_paths, frames, r, o);
   s.outputs_s = stopwatch.Lap();

@@ -192,6 +192,11 @@ struct SideOptions {
   GroundPlaneOptions ground;
   // Signs of a broken reconstruction, reported as warnings (side.json).
   ReconstructionCheckOptions reconstruction_check;
+  // When more fruit points than the check allows lie below a fitted ground
+  // plane, fit it again with each fruit point below a candidate costing one
+  // inlier, rescale and count again; the refit is kept when less fruit lies
+  // below it (a plane tilted about the path or on the canopy's lower edge).
+  bool refit_ground_below_fruit = true;
   ClusterOptions clusters;
   // Give every frame the centres of circles fitted to its blobs' outlines
   // (FitAppleCentres) for the 3D stage to triangulate instead of the blob

@@ -45,7 +45,8 @@ void GroundPlaneOptions::Check() const {
 }
 
 Plane FitGroundPlane(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& camera_centres,
-                     const Eigen::Vector3d& up_in, const GroundPlaneOptions& options, int* num_inliers) {
+                     const Eigen::Vector3d& up_in, const GroundPlaneOptions& options, int* num_inliers,
+                     const std::vector<Eigen::Vector3d>* above, double above_penalty) {
   options.Check();
   if (camera_centres.empty()) Fail("ground plane: no cameras");
   if (static_cast<int>(points.size()) < options.min_inliers)
@@ -76,7 +77,10 @@ Plane FitGroundPlane(const std::vector<Eigen::Vector3d>& points, const std::vect
       const double d = p.SignedDistance(x);
       inliers += std::abs(d) < tol, below += d <= -tol;
     }
-    return inliers - options.below_penalty * below;
+    int above_below = 0;
+    if (above)
+      for (const auto& x : *above) above_below += p.SignedDistance(x) <= -tol;
+    return inliers - options.below_penalty * below - above_penalty * above_below;
   };
   Plane best;
   int best_count = -1;

@@ -45,8 +45,13 @@ struct GroundPlaneOptions {
 // The ground plane of `points`; `up` is the cameras' mean up direction and
 // `camera_centres` must all lie above the plane. Throws orchard::Error when
 // no plane has enough inliers (too few points on the ground).
+// `above` (may be null): points known to lie above the ground (the fruit);
+// each one below a candidate plane (beyond the inlier distance) costs
+// `above_penalty` inliers, for a refit when a first plane cut through the
+// fruit.
 Plane FitGroundPlane(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& camera_centres,
-                     const Eigen::Vector3d& up, const GroundPlaneOptions& options, int* num_inliers = nullptr);
+                     const Eigen::Vector3d& up, const GroundPlaneOptions& options, int* num_inliers = nullptr,
+                     const std::vector<Eigen::Vector3d>* above = nullptr, double above_penalty = 1);
 
 // Mean up direction of the cameras (minus their image y axes), unit length.
 Eigen::Vector3d MeanCameraUp(const std::vector<CameraView>& views);

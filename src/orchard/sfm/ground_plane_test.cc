@@ -76,6 +76,34 @@ TEST(GroundPlane, PrefersTheLowestSurfaceToADenserLayerAboveIt) {
   EXPECT_THROW(o.Check(), Error);
 }
 
+TEST(GroundPlane, FruitKnownToBeAboveCorrectsAPlaneThroughIt) {
+  // The same ground and layer as above, with inliers alone (the layer wins),
+  // and a fruit wall 0.3-2.3 m high that the layer cuts: each fruit point
+  // below a candidate costs an inlier, and the ground wins.
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<Eigen::Vector3d> pts, fruit;
+  for (int i = 0; i < 100; ++i) pts.push_back({4 * u(rng), 1 + 2 * u(rng), 0.01 * u(rng)});
+  for (int i = 0; i < 120; ++i) pts.push_back({4 * u(rng), 0.4 * u(rng), 0.75 + 0.01 * u(rng)});
+  for (int i = 0; i < 300; ++i) fruit.push_back({4 * u(rng), 0.3 * u(rng), 1.3 + u(rng)});
+  std::vector<Eigen::Vector3d> centres;
+  for (int i = 0; i < 5; ++i) centres.push_back({i * 0.5, -2.5, 1.5});
+  const Eigen::Vector3d up(0, 0, 1);
+  GroundPlaneOptions o;
+  o.below_penalty = 0;
+  EXPECT_NEAR(FitGroundPlane(pts, centres, up, o).SignedDistance(Eigen::Vector3d::Zero()), -0.75, 0.02);
+  int inliers = 0;
+  const Plane g = FitGroundPlane(pts, centres, up, o, &inliers, &fruit, 1.0);
+  EXPECT_NEAR(g.SignedDistance(Eigen::Vector3d::Zero()), 0, 0.02);
+  EXPECT_GE(inliers, 95);
+  EXPECT_LE(inliers, 105);
+  // Fruit above both planes changes nothing.
+  std::vector<Eigen::Vector3d> high;
+  for (const auto& x : fruit) high.push_back(x + Eigen::Vector3d(0, 0, 1));
+  EXPECT_NEAR(FitGroundPlane(pts, centres, up, o, nullptr, &high, 1.0).SignedDistance(Eigen::Vector3d::Zero()), -0.75,
+              0.02);
+}
+
 TEST(GroundPlane, FailsClearlyWithoutGroundPoints) {
   std::vector<CameraView> views = {CameraAt({0, -2.5, 1.5}), CameraAt({1, -2.5, 1.5})};
   std::vector<Eigen::Vector3d> centres = {views[0].Center(), views[1].Center()};
