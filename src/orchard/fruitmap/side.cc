@@ -635,25 +635,32 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
     std::vector<Eigen::Vector3d> fruit = fruit_of(r);
     for (auto& X : fruit) X /= scale;  // back to the model's frame
     int inliers = 0;
-    const Plane refit = FitGroundPlane(pts, centres, MeanCameraUp(model_views), o.ground, &inliers, &fruit, 1.0);
-    std::vector<CameraView> refit_views;
-    double refit_scale = 1;
-    const Plane refit_ground = metric(refit, &refit_views, &refit_scale);
-    ClusterResult refit_r = CountFruitClusters(refit_views, frames, refit_ground, clusters);
-    ReconstructionCheck refit_check = CheckReconstruction(refit_views, refit_ground, &model, o.reconstruction_check);
-    CheckFruitAboveGround(fruit_of(refit_r), refit_ground, o.reconstruction_check, &refit_check);
-    if (refit_check.fruit_below_ground < check.fruit_below_ground) {
-      char note[200];
-      std::snprintf(note, sizeof note,
-                    "the ground plane was fitted again below the fruit (%.0f%% of the fruit points lay below the "
-                    "first fit; scale %.3g -> %.3g)",
-                    100 * check.fruit_below_ground, scale, refit_scale);
-      refit_check.warnings.insert(refit_check.warnings.begin(), note);
-      ground = refit_ground, views = refit_views, scale = refit_scale, r = std::move(refit_r);
-      check = std::move(refit_check);
-      logged = 0;
-      ground_source = "fitted again to " + std::to_string(inliers) + " of " + std::to_string(pts.size()) +
-                      " sparse points, below the fruit";
+    std::optional<Plane> refit;
+    try {
+      refit = FitGroundPlane(pts, centres, MeanCameraUp(model_views), o.ground, &inliers, &fruit, 1.0);
+    } catch (const Error& e) {  // no plane below the fruit has enough ground points: keep the first fit
+      spdlog::warn("reconstruction: no ground plane below the fruit ({})", e.what());
+    }
+    if (refit) {
+      std::vector<CameraView> refit_views;
+      double refit_scale = 1;
+      const Plane refit_ground = metric(*refit, &refit_views, &refit_scale);
+      ClusterResult refit_r = CountFruitClusters(refit_views, frames, refit_ground, clusters);
+      ReconstructionCheck refit_check = CheckReconstruction(refit_views, refit_ground, &model, o.reconstruction_check);
+      CheckFruitAboveGround(fruit_of(refit_r), refit_ground, o.reconstruction_check, &refit_check);
+      if (refit_check.fruit_below_ground < check.fruit_below_ground) {
+        char note[200];
+        std::snprintf(note, sizeof note,
+                      "the ground plane was fitted again below the fruit (%.0f%% of the fruit points lay below the "
+                      "first fit; scale %.3g -> %.3g)",
+                      100 * check.fruit_below_ground, scale, refit_scale);
+        refit_check.warnings.insert(refit_check.warnings.begin(), note);
+        ground = refit_ground, views = refit_views, scale = refit_scale, r = std::move(refit_r);
+        check = std::move(refit_check);
+        logged = 0;
+        ground_source = "fitted again to " + std::to_string(inliers) + " of " + std::to_string(pts.size()) +
+                        " sparse points, below the fruit";
+      }
     }
   }
   for (size_t i = logged; i < check.warnings.size(); ++i) spdlog::warn("reconstruction: {}", check.warnings[i]);
