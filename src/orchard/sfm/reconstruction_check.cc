@@ -93,8 +93,13 @@ ReconstructionCheck CheckReconstruction(const std::vector<CameraView>& views, co
     r.warnings.push_back("the cameras hardly move: no reconstruction of the row can come from this sequence");
   } else {
     for (size_t i = 0; i + 1 < n; ++i) {
-      const double ratio = steps[i] / r.median_step;
-      if (ratio > r.max_step_ratio) r.max_step_ratio = ratio, r.longest_step_after = views[i].name;
+      std::vector<double> around;
+      for (size_t j = i > 5 ? i - 5 : 0; j < std::min(steps.size(), i + 6); ++j)
+        if (j != i) around.push_back(steps[j]);
+      const double local = around.empty() ? r.median_step : std::max(r.median_step, Quantile(around, 0.5));
+      const double ratio = steps[i] / local;
+      if (ratio > r.max_step_ratio)
+        r.max_step_ratio = ratio, r.longest_step = steps[i], r.longest_step_after = views[i].name;
       const double back = s[i] - s[i + 1];
       r.backward_steps += back > 0.5 * r.median_step && back > 0.01 * r.path_extent;
     }
@@ -126,7 +131,7 @@ ReconstructionCheck CheckReconstruction(const std::vector<CameraView>& views, co
   // Warnings, one line each, with the likely cause.
   if (moved) {
     if (r.max_step_ratio > options.max_step_ratio)
-      r.warnings.push_back(Format("camera path: a jump of %.2f m, %.1f times the median step,", r.max_step_ratio * r.median_step,
+      r.warnings.push_back(Format("camera path: a jump of %.2f m, %.1f times the steps around it,", r.longest_step,
                                   r.max_step_ratio) +
                            " after frame " + r.longest_step_after + " (frames missing, or the reconstruction broke there)");
     if (r.backward_steps > options.max_backward_steps)

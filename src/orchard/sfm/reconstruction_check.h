@@ -17,9 +17,11 @@
 namespace orchard {
 
 struct ReconstructionCheckOptions {
-  // A step between consecutive frames longer than this many times the median
-  // step is a jump (frames missing, or the reconstruction broke there).
-  // Synthetic rows, true poses and COLMAP: at most 1.3.
+  // A step between consecutive frames longer than this many times the steps
+  // around it (the median of the 5 before and after, but at least the
+  // sequence's median step) is a jump (frames missing, or the reconstruction
+  // broke there); measured locally so that a walk that stops and goes on is
+  // no jump. Synthetic rows, true poses and COLMAP: at most 1.4.
   double max_step_ratio = 4;
   // A step that goes back along the path by more than half the median step
   // (and more than 1% of the path's extent) is a backward step: a folded
@@ -56,8 +58,9 @@ struct ReconstructionCheck {
   double path_length = 0;     // sum of the steps (m, in the views' units)
   double path_extent = 0;     // first to last camera along the path's axis
   double median_step = 0;
-  double max_step_ratio = 0;  // longest step / median step
-  std::string longest_step_after;  // frame name before the longest step
+  double max_step_ratio = 0;  // largest step / the steps around it
+  double longest_step = 0;    // that step (m)
+  std::string longest_step_after;  // frame name before it
   int backward_steps = 0;
   double bend = 0;            // largest distance off the line / extent
   double height_median = 0;   // cameras' height above the ground

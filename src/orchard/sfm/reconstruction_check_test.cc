@@ -70,7 +70,25 @@ TEST(ReconstructionCheck, AJumpNamesTheFrameBeforeIt) {
   EXPECT_EQ(r.longest_step_after, Name(19));
   ASSERT_EQ(r.warnings.size(), 1u);
   EXPECT_TRUE(Warns(r, "a jump of 1.1")) << r.warnings.front();
+  EXPECT_NEAR(r.longest_step, 1.125, 0.03);
   EXPECT_TRUE(Warns(r, "after frame frame_0019.png"));
+}
+
+TEST(ReconstructionCheck, AWalkThatStopsIsNoJump) {
+  // 12 frames walking 12.5 cm apart, 30 standing (1 mm of shake), 12 walking:
+  // the median step is the shake, the walking steps are not jumps.
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-0.001, 0.001);
+  std::vector<CameraView> views;
+  double x = 0;
+  for (int i = 0; i < 54; ++i) {
+    if (i < 12 || i >= 42) x += 0.125;
+    views.push_back(CameraAt({x + u(rng), -2.5 + u(rng), 1.5 + u(rng)}, Name(i)));
+  }
+  const ReconstructionCheck r = CheckReconstruction(views, kGround, nullptr, {});
+  EXPECT_LT(r.median_step, 0.01);
+  EXPECT_LT(r.max_step_ratio, 2);
+  EXPECT_TRUE(r.warnings.empty()) << r.warnings.front();
 }
 
 TEST(ReconstructionCheck, FramesOutOfOrderGoBackwards) {
