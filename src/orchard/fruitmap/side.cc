@@ -629,10 +629,10 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
     return fruit;
   };
   size_t logged = check.warnings.size();  // the path's, logged above
-  CheckFruitAboveGround(fruit_of(r), ground, o.reconstruction_check, &check);
+  std::vector<Eigen::Vector3d> fruit = fruit_of(r);
+  CheckFruitAboveGround(fruit, ground, o.reconstruction_check, &check);
   if (check.fruit_below_ground > o.reconstruction_check.max_fruit_below_ground && !in.ground &&
       o.refit_ground_below_fruit) {
-    std::vector<Eigen::Vector3d> fruit = fruit_of(r);
     for (auto& X : fruit) X /= scale;  // back to the model's frame
     int inliers = 0;
     std::optional<Plane> refit;

@@ -5,6 +5,7 @@
 #include <map>
 
 #include "orchard/core/error.h"
+#include "orchard/core/quantile.h"
 
 namespace orchard {
 
@@ -38,13 +39,6 @@ void RowRegistrationOptions::Check() const {
 }
 
 namespace {
-
-double Quantile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  const size_t k = std::min(v.size() - 1, static_cast<size_t>(q * static_cast<double>(v.size())));
-  std::nth_element(v.begin(), v.begin() + static_cast<long>(k), v.end());
-  return v[k];
-}
 
 // Least-squares plane z = a x + b y + c.
 Eigen::Vector3d FitHeightPlane(const std::vector<Eigen::Vector3d>& pts) {

@@ -7,14 +7,10 @@
 #include <Eigen/Eigenvalues>
 
 #include "orchard/core/error.h"
+#include "orchard/core/quantile.h"
 
 namespace orchard {
 namespace {
-
-double Median(std::vector<double> v) {
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
 
 // Least-squares plane through points (smallest principal axis), normal
 // oriented along `up`.
@@ -56,7 +52,7 @@ Plane FitGroundPlane(const std::vector<Eigen::Vector3d>& points, const std::vect
   std::vector<double> ranges;
   for (size_t i = 0; i < points.size(); i += std::max<size_t>(1, points.size() / 500))
     ranges.push_back((points[i] - camera_centres[camera_centres.size() / 2]).norm());
-  const double tol = options.inlier_fraction * Median(ranges);
+  const double tol = options.inlier_fraction * Quantile(ranges, 0.5);
   const double cos_tilt = std::cos(options.max_tilt_deg * M_PI / 180);
   std::mt19937_64 rng(options.seed);
   std::uniform_int_distribution<size_t> pick(0, points.size() - 1);
@@ -129,7 +125,7 @@ double ScaleFromCameraHeight(const Plane& ground, const std::vector<CameraView>&
   if (views.empty()) Fail("scale from camera height: no cameras");
   std::vector<double> heights;
   for (const auto& v : views) heights.push_back(ground.SignedDistance(v.Center()));
-  const double h = Median(heights);
+  const double h = Quantile(heights, 0.5);
   if (!(h > 0)) Fail("the cameras are not above the ground plane (median height ", h, ")");
   return camera_height / h;
 }

@@ -7,16 +7,10 @@
 #include <Eigen/Eigenvalues>
 
 #include "orchard/core/error.h"
+#include "orchard/core/quantile.h"
 
 namespace orchard {
 namespace {
-
-// The q-quantile (0..1) of v by nearest rank.
-double Quantile(std::vector<double> v, double q) {
-  const size_t k = std::min(v.size() - 1, static_cast<size_t>(q * static_cast<double>(v.size() - 1) + 0.5));
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
-  return v[k];
-}
 
 std::string Format(const char* format, double a, double b = 0, double c = 0) {
   char text[256];
