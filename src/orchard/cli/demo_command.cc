@@ -37,7 +37,7 @@ void AddDemoCommand(CLI::App& app) {
     std::printf("orchard demo: synthetic row (seed %llu, %d trees) filmed from both sides, counted with %s + %s,\n"
                 "poses %s. Outputs in %s.\n\n",
                 static_cast<unsigned long long>(a->seed), a->trees, a->fruit.detector.c_str(),
-                a->fruit.counter.c_str(), a->colmap ? "from COLMAP, the sides registered from their fruit"
+                CounterName(a->fruit).c_str(), a->colmap ? "from COLMAP, the sides registered from their fruit"
                            : "from the generator (both sides in one frame)",
                 (out / "yield").string().c_str());
     std::fflush(stdout);  // before the stages log to stderr

@@ -99,7 +99,9 @@ void AddFruitOptions(CLI::App* cmd, FruitArgs* a) {
   cmd->add_option("--detector", a->detector, "Fruit: gmm, unet, or masks (the generator's instance masks)")
       ->capture_default_str();
   cmd->add_option("--model", a->model, "Detector model (default: the shipped model of the detector)");
-  cmd->add_option("--counter", a->counter, "Apples per blob: cnn, gmm, or blob (one each)")->capture_default_str();
+  cmd->add_option("--counter", a->counter,
+                  "Apples per blob: cnn, gmm, blob (one each), or auto (blob for --detector masks, else cnn)")
+      ->capture_default_str();
   cmd->add_option("--counter-model", a->counter_model, "Counter model (default: the shipped one)");
   cmd->add_option("--threads", a->threads, "Detector and counter threads (0 = all cores)")->capture_default_str();
   cmd->add_option("--min-blob-pixels", a->min_blob_pixels, "Detector blobs smaller than this (pixels) are dropped")
@@ -115,7 +117,13 @@ void AddFruitOptions(CLI::App* cmd, FruitArgs* a) {
       ->capture_default_str();
 }
 
-void SetUpFruit(const FruitArgs& a, const std::string& masks, FruitTools* tools, SideInputs* in) {
+std::string CounterName(const FruitArgs& args) {
+  if (args.counter != "auto") return args.counter;
+  return args.detector == "masks" ? "blob" : "cnn";
+}
+
+void SetUpFruit(FruitArgs a, const std::string& masks, FruitTools* tools, SideInputs* in) {
+  a.counter = CounterName(a);
   if (a.detector == "masks") {
     if (masks.empty()) Fail("--detector masks needs the instance-mask folder (--masks)");
     in->masks = masks;

@@ -20,7 +20,6 @@ void AddSideCommand(CLI::App& app) {
     SideOptions options;
   };
   auto a = std::make_shared<Args>();
-  a->fruit.counter = "blob";
   cmd->add_option("--in", a->in, "Video file or folder of frames")->required();
   cmd->add_option("--out", a->out, "Output folder (caches frames/, sparse/, detections/ for reruns)")->required();
   cmd->add_option("--poses", a->poses, "COLMAP text model of the frames (default: run COLMAP)");

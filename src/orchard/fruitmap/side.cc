@@ -663,6 +663,12 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
       }
     }
   }
+  // Single apples before the size filter too, so a scale too small (every
+  // apple filtered as small) still shows.
+  std::vector<double> single_apple_radii;
+  for (const auto& c : r.clusters)
+    if (c.count == 1 && (c.status == "kept" || c.status == "small")) single_apple_radii.push_back(c.apple_radius_seen);
+  CheckAppleSize(std::move(single_apple_radii), clusters.points.apple_radius, o.reconstruction_check, &check);
   for (size_t i = logged; i < check.warnings.size(); ++i) spdlog::warn("reconstruction: {}", check.warnings[i]);
   s.one_side_count =
       o.one_side_clusters ? CountFruitClusters(views, frames, ground, resolved(*o.one_side_clusters), r.points).count
@@ -712,7 +718,9 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
                           {"height_median", check.height_median}, {"height_spread", check.height_spread},
                           {"view_angle_deg", check.view_angle_deg},
                           {"reprojection_error_px", check.reprojection_error_px},
-                          {"fruit_below_ground", check.fruit_below_ground}}},
+                          {"fruit_below_ground", check.fruit_below_ground},
+                          {"apple_radius", check.apple_radius},
+                          {"single_apples", check.single_apples}}},
       {"row_distance", r.row_distance},
       {"depth_cutoff", r.depth_cutoff},
       {"depth_cutoff_from", r.depth_cutoff_from_gap ? "gap" : "margin"},

@@ -37,6 +37,13 @@ void ReconstructionCheckOptions::Check() const {
                        below_ground_margin);
   ORCHARD_CHECK_OPTION(max_fruit_below_ground > 0 && max_fruit_below_ground <= 1,
                        "reconstruction check: max fruit below ground must be in (0, 1], got ", max_fruit_below_ground);
+  ORCHARD_CHECK_OPTION(apple_size_quantile >= 0 && apple_size_quantile <= 1,
+                       "reconstruction check: apple size quantile must be in [0, 1], got ", apple_size_quantile);
+  ORCHARD_CHECK_OPTION(min_apple_size > 0 && max_apple_size > min_apple_size,
+                       "reconstruction check: apple size bounds must satisfy 0 < min < max, got ", min_apple_size,
+                       ", ", max_apple_size);
+  ORCHARD_CHECK_OPTION(min_apple_clusters >= 1, "reconstruction check: min apple clusters must be >= 1, got ",
+                       min_apple_clusters);
 }
 
 ReconstructionCheck CheckReconstruction(const std::vector<CameraView>& views, const Plane& ground,
@@ -165,6 +172,25 @@ void CheckFruitAboveGround(const std::vector<Eigen::Vector3d>& fruit_points, con
     check->warnings.push_back(Format("%.0f%% of the fruit points lie below the ground plane (the plane is wrong, e.g. "
                                      "tilted about the camera path; fallen apples and heights rest on it)",
                                      100 * check->fruit_below_ground));
+}
+
+void CheckAppleSize(std::vector<double> single_apple_radii, double apple_radius,
+                    const ReconstructionCheckOptions& options, ReconstructionCheck* check) {
+  options.Check();
+  ORCHARD_CHECK_OPTION(apple_radius > 0, "reconstruction check: apple radius must be positive, got ", apple_radius);
+  check->single_apples = static_cast<int>(single_apple_radii.size());
+  if (check->single_apples < options.min_apple_clusters) return;
+  check->apple_radius = Quantile(std::move(single_apple_radii), options.apple_size_quantile);
+  const double ratio = check->apple_radius / apple_radius;
+  if (ratio < options.min_apple_size)
+    check->warnings.push_back(Format("single apples measure %.1f cm in radius at this scale, under %.2g of the "
+                                     "expected %.1f cm: the scale is likely too small (camera height, ground plane); "
+                                     "for small fruit give --apple-radius",
+                                     100 * check->apple_radius, options.min_apple_size, 100 * apple_radius));
+  else if (ratio > options.max_apple_size)
+    check->warnings.push_back(Format("single apples measure %.1f cm in radius at this scale, over %.2g times the "
+                                     "expected %.1f cm: the scale is likely too large (camera height, ground plane)",
+                                     100 * check->apple_radius, options.max_apple_size, 100 * apple_radius));
 }
 
 }  // namespace orchard

@@ -50,6 +50,19 @@ struct ReconstructionCheckOptions {
   // good planes: exact masks 0-0.03%, the U-Net's chance points about 1%).
   double below_ground_margin = 0.1;
   double max_fruit_below_ground = 0.05;
+  // The radius single apples (clusters counted one apple) show at their
+  // depth, its 75th percentile over the clusters (the chance clusters, most of
+  // them small pieces, fill the lower half), against the expected apple
+  // radius: outside these fractions of it the scale is likely wrong (a camera
+  // height or a ground plane off by 2x or more). Measured against 3 cm on
+  // COLMAP sides at the right scale: exact masks 1.38x (seed 246's front),
+  // the U-Net 1.52-2.27x (seeds 245-249, both sides; its blobs are larger
+  // than the apple). Seed 246's front at scales 2x too large and too small:
+  // exact masks 2.69x (passes) and 0.57x, the U-Net 4.0x and 0.88x (passes).
+  double apple_size_quantile = 0.75;
+  double min_apple_size = 0.6;
+  double max_apple_size = 3;
+  int min_apple_clusters = 10;  // fewer single apples: no check
   void Check() const;
 };
 
@@ -68,6 +81,8 @@ struct ReconstructionCheck {
   double view_angle_deg = 0;  // mean viewing direction against across-the-path
   double reprojection_error_px = -1;  // mean over the sparse points; -1 without points
   double fruit_below_ground = -1;     // fraction of the fruit points; -1 before CheckFruitAboveGround
+  double apple_radius = -1;           // single apples' radius (m, the quantile); -1 before CheckAppleSize or with too few
+  int single_apples = 0;              // clusters it is taken over
   std::vector<std::string> warnings;  // one line each; empty when nothing looks wrong
 };
 
@@ -81,5 +96,12 @@ ReconstructionCheck CheckReconstruction(const std::vector<CameraView>& views, co
 // plane to `check`, and a warning when it is too large.
 void CheckFruitAboveGround(const std::vector<Eigen::Vector3d>& fruit_points, const Plane& ground,
                            const ReconstructionCheckOptions& options, ReconstructionCheck* check);
+
+// Adds the `apple_size_quantile` of `single_apple_radii` (the radius each
+// cluster counted as one apple shows at its depth, metric) to `check`, and a warning when it is
+// far from `apple_radius`: apples have a size, so they tell a gross scale
+// error that the camera path cannot show.
+void CheckAppleSize(std::vector<double> single_apple_radii, double apple_radius,
+                    const ReconstructionCheckOptions& options, ReconstructionCheck* check);
 
 }  // namespace orchard

@@ -199,12 +199,49 @@ TEST(ReconstructionCheck, FruitBelowTheGroundPlane) {
   EXPECT_TRUE(Warns(r, "of the fruit points lie below the ground plane"));
 }
 
+TEST(ReconstructionCheck, ApplesOfTheWrongSizeMeanAWrongScale) {
+  // Single apples of 3-5 cm, as the exact masks show them at the right scale.
+  std::vector<double> radii;
+  for (int i = 0; i < 40; ++i) radii.push_back(0.03 + 0.02 * i / 39.0);
+  ReconstructionCheck r;
+  CheckAppleSize(radii, 0.03, {}, &r);
+  EXPECT_NEAR(r.apple_radius, 0.045, 0.001);  // the 75th percentile
+  EXPECT_EQ(r.single_apples, 40);
+  EXPECT_TRUE(r.warnings.empty());
+  // A scale 3x too small (a camera height given that much too low) shrinks
+  // them to 1-1.7 cm (1.5 cm, half of 3 cm, at the 75th percentile) ...
+  std::vector<double> small = radii, large = radii;
+  for (auto& x : small) x /= 3;
+  CheckAppleSize(small, 0.03, {}, &r);
+  EXPECT_TRUE(Warns(r, "the scale is likely too small"));
+  EXPECT_TRUE(Warns(r, "--apple-radius"));  // or the fruit is small: the user is told how to say so
+  // ... and 2.5x too large grows them to 7.5-12.5 cm (11.25 cm, 3.75 times
+  // 3 cm).
+  r = {};
+  for (auto& x : large) x *= 2.5;
+  CheckAppleSize(large, 0.03, {}, &r);
+  EXPECT_TRUE(Warns(r, "the scale is likely too large"));
+  // Fruitlets of 1-1.7 cm with --apple-radius 0.015 pass.
+  r = {};
+  CheckAppleSize(small, 0.015, {}, &r);
+  EXPECT_TRUE(r.warnings.empty()) << r.warnings.front();
+  // Too few single apples to tell: no measure, no warning.
+  r = {};
+  CheckAppleSize(std::vector<double>(small.begin(), small.begin() + 9), 0.03, {}, &r);
+  EXPECT_EQ(r.apple_radius, -1);
+  EXPECT_TRUE(r.warnings.empty());
+  EXPECT_THROW(CheckAppleSize(radii, 0, {}, &r), Error);
+}
+
 TEST(ReconstructionCheck, BadOptions) {
   ReconstructionCheckOptions o;
   o.max_step_ratio = 1;
   EXPECT_THROW(CheckReconstruction(RowPath(), kGround, nullptr, o), Error);
   o = {};
   o.max_view_angle_deg = 0;
+  EXPECT_THROW(o.Check(), Error);
+  o = {};
+  o.min_apple_size = 3;  // above the maximum
   EXPECT_THROW(o.Check(), Error);
 }
 
