@@ -65,9 +65,25 @@ TEST_F(SideTest, CountsTheVisibleApplesOnceFromTruePosesAndMasks) {
   EXPECT_EQ(check.at("backward_steps").get<int>(), 0);
   EXPECT_EQ(check.at("reprojection_error_px").get<double>(), -1);  // given poses: no sparse points
   EXPECT_LT(check.at("fruit_below_ground").get<double>(), 0.01);
+  // Single apples measure an apple's size (3-5 cm; 4.1-4.6 cm on fresh rows).
+  EXPECT_GT(check.at("single_apples").get<int>(), 10);
+  EXPECT_NEAR(check.at("apple_radius").get<double>(), 0.043, 0.01);
   // A rerun resumes from the cached detections and gives the same count.
   EXPECT_TRUE(fs::exists(*dir_ / "out/detections/frame_0000.json"));
   EXPECT_EQ(RunSide(Inputs("out"), o).count, s.count);
+}
+
+TEST_F(SideTest, WarnsWhenApplesShowTheScaleIsWrong) {
+  // The true poses rescaled to a camera height of 0.5 m instead of 1.5: the
+  // row shrinks to a third, and so do the apples.
+  SideOptions o;
+  o.rescale_given_poses = true;
+  o.camera_height = 0.5;
+  const SideSummary s = RunSide(Inputs("small_scale"), o);
+  const auto check = nlohmann::json::parse(ReadTextFile(*dir_ / "small_scale/side.json")).at("reconstruction");
+  EXPECT_LT(check.at("apple_radius").get<double>(), 0.018);
+  ASSERT_FALSE(s.warnings.empty());
+  EXPECT_NE(s.warnings.back().find("the scale is likely too small"), std::string::npos) << s.warnings.back();
 }
 
 TEST_F(SideTest, FailsClearly) {
