@@ -1,5 +1,6 @@
 // End to end on a tiny synthetic row: true poses and the generator's masks
 // through the library, count checked against truth.json.
+#include <cstdlib>
 #include <fstream>
 
 #include <gtest/gtest.h>
@@ -84,6 +85,25 @@ TEST_F(SideTest, WarnsWhenApplesShowTheScaleIsWrong) {
   EXPECT_LT(check.at("apple_radius").get<double>(), 0.018);
   ASSERT_FALSE(s.warnings.empty());
   EXPECT_NE(s.warnings.back().find("the scale is likely too small"), std::string::npos) << s.warnings.back();
+}
+
+TEST_F(SideTest, CommandCountsDetectorBlobsWithTheCnnByDefault) {
+  // `orchard side` without --counter: instance masks are one apple per blob,
+  // a detector's blobs go to the CNN counter (as in `orchard yield`; before,
+  // the command counted a U-Net blob of touching apples as one).
+  const char* bin = std::getenv("ORCHARD_BIN");
+  if (!bin || !fs::exists(bin)) GTEST_SKIP() << "ORCHARD_BIN not built";
+  const fs::path row = *dir_ / "synth/front";
+  const std::string common = " --in '" + (row / "images").string() + "' --poses '" + (row / "sparse").string() +
+                             "' --ground-plane '" + (row / "scene.json").string() + "' --draw-every 0";
+  for (const auto& [detector, counter] : {std::pair<std::string, std::string>{"masks", "blob"}, {"gmm", "cnn:"}}) {
+    const fs::path out = *dir_ / ("cli_" + detector);
+    std::string args = common + " --detector " + detector + " --out '" + out.string() + "'";
+    if (detector == "masks") args += " --masks '" + (row / "masks").string() + "'";
+    ASSERT_EQ(std::system(("'" + std::string(bin) + "' side" + args + " > /dev/null 2>&1").c_str()), 0) << detector;
+    const auto side = nlohmann::json::parse(ReadTextFile(out / "side.json"));
+    EXPECT_EQ(side.at("counter").get<std::string>().rfind(counter, 0), 0u) << side.at("counter");
+  }
 }
 
 TEST_F(SideTest, FailsClearly) {
