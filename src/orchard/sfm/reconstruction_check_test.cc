@@ -241,7 +241,7 @@ TEST(ReconstructionCheck, BadOptions) {
   o.max_view_angle_deg = 0;
   EXPECT_THROW(o.Check(), Error);
   o = {};
-  o.min_apple_size = 3;  // above the maximum
+  o.min_apple_size = 4;  // above the maximum
   EXPECT_THROW(o.Check(), Error);
 }
 
