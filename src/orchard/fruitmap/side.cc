@@ -404,9 +404,33 @@ void CountBlobs(const cv::Mat& image, Counter* counter, FruitFrame* frame) {
   for (size_t i = 0; i < counts.size(); ++i) frame->counts[i] = counts[i].count;
 }
 
+// A frame's instance mask in `dir`: the one of the same name or, for frames
+// SelectFrames wrote with padded numbers, the one whose name pads the same
+// (the folder listed once, at the first frame that needs it).
+class MaskFinder {
+ public:
+  explicit MaskFinder(fs::path dir) : dir_(std::move(dir)) {}
+  fs::path Find(const std::string& stem) {
+    const fs::path same = dir_ / (stem + ".png");
+    if (fs::exists(same)) return same;
+    if (!listed_) {
+      for (const auto& p : ListImages(dir_)) by_padded_stem_.emplace(PadDigitRuns(p.stem().string()), p);
+      listed_ = true;
+    }
+    const auto it = by_padded_stem_.find(PadDigitRuns(stem));
+    return it == by_padded_stem_.end() ? same : it->second;
+  }
+
+ private:
+  fs::path dir_;
+  bool listed_ = false;
+  std::map<std::string, fs::path> by_padded_stem_;  // the first in natural order
+};
+
 // Detections and counts of one frame, from the cache when it was made by the
-// same detector and counter.
-FruitFrame FrameFruit(const SideInputs& in, const fs::path& image_path, const fs::path& cache_dir) {
+// same detector and counter; `masks` finds the instance masks without a detector.
+FruitFrame FrameFruit(const SideInputs& in, const fs::path& image_path, const fs::path& cache_dir,
+                      MaskFinder* masks) {
   const std::string stem = image_path.stem().string();
   const fs::path cache_png = cache_dir / (stem + ".png"), cache_json = cache_dir / (stem + ".json");
   if (fs::exists(cache_png) && fs::exists(cache_json)) {
@@ -426,13 +450,7 @@ FruitFrame FrameFruit(const SideInputs& in, const fs::path& image_path, const fs
     const FrameDetection d = in.detector->Detect(image);
     frame = FruitFromInstanceMask(InstanceMask(d));
   } else {
-    fs::path mask_path = in.masks / (stem + ".png");
-    if (!fs::exists(mask_path))  // frames renamed with padded numbers (SelectFrames), masks not
-      for (const auto& p : ListImages(in.masks))
-        if (PadDigitRuns(p.stem().string()) == PadDigitRuns(stem)) {
-          mask_path = p;
-          break;
-        }
+    const fs::path mask_path = masks->Find(stem);
     if (!fs::exists(mask_path)) Fail("no instance mask for frame ", image_path.filename().string(), " (", mask_path.string(), ")");
     const cv::Mat mask = ReadImage(mask_path, cv::IMREAD_UNCHANGED);
     if (mask.size() != image.size() || mask.channels() != 1)
@@ -606,9 +624,10 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   // Fruit per frame (cached).
   std::vector<fs::path> image_paths;
   std::vector<FruitFrame> frames;
+  MaskFinder masks(in.masks);
   for (const auto& v : views) {
     image_paths.push_back(image_dir / v.name);
-    frames.push_back(FrameFruit(in, image_paths.back(), in.out / "detections"));
+    frames.push_back(FrameFruit(in, image_paths.back(), in.out / "detections", &masks));
     if (o.split_counted_blobs) SplitCountedBlobs(&frames.back());
     if (o.fit_apple_circles) FitAppleCentres(&frames.back());
     if (frames.back().labels.cols != v.width || frames.back().labels.rows != v.height)
