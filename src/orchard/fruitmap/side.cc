@@ -347,7 +347,15 @@ void SideOptions::Check() const {
   clusters.Check();
   ORCHARD_CHECK_OPTION(camera_height > 0, "camera height must be positive, got ", camera_height);
   ORCHARD_CHECK_OPTION(draw_every >= 0, "draw every must be >= 0, got ", draw_every);
+  ORCHARD_CHECK_OPTION(max_refit_scale_change > 1, "max refit scale change must be > 1, got ",
+                       max_refit_scale_change);
   if (one_side_clusters) one_side_clusters->Check();
+}
+
+bool RefitScaleIsPlausible(double scale, double refit_scale, const SideOptions& options) {
+  if (!(scale > 0) || !(refit_scale > 0)) return false;
+  const double change = refit_scale / scale;
+  return change <= options.max_refit_scale_change && change >= 1 / options.max_refit_scale_change;
 }
 
 namespace {
@@ -667,7 +675,14 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
       ClusterResult refit_r = CountFruitClusters(refit_views, frames, refit_ground, clusters);
       ReconstructionCheck refit_check = CheckReconstruction(refit_views, refit_ground, &model, o.reconstruction_check);
       CheckFruitAboveGround(fruit_of(refit_r), refit_ground, o.reconstruction_check, &refit_check);
-      if (refit_check.fruit_below_ground < check.fruit_below_ground) {
+      if (!RefitScaleIsPlausible(scale, refit_scale, o)) {
+        char note[240];
+        std::snprintf(note, sizeof note,
+                      "a ground plane fitted again below the fruit would change the scale %.3g -> %.3g, more than "
+                      "%.3gx: the first fit is kept (the reconstruction itself is likely broken)",
+                      scale, refit_scale, o.max_refit_scale_change);
+        check.warnings.push_back(note);
+      } else if (refit_check.fruit_below_ground < check.fruit_below_ground) {
         char note[200];
         std::snprintf(note, sizeof note,
                       "the ground plane was fitted again below the fruit (%.0f%% of the fruit points lay below the "

@@ -131,5 +131,18 @@ TEST_F(SideTest, FailsClearly) {
   EXPECT_FALSE(fs::exists(*dir_ / "bad/side.json"));
 }
 
+// A ground refit may mend a plane tilted about the path (0.54x and 0.98x on
+// seeds 11 and 12) but not change the scale a hundredfold (a folded model).
+TEST(SideOptionsTest, RefitKeepsTheScaleWithinTheBound) {
+  SideOptions o;  // max_refit_scale_change 3
+  EXPECT_TRUE(RefitScaleIsPlausible(0.754, 0.405, o));
+  EXPECT_TRUE(RefitScaleIsPlausible(0.412, 0.403, o));
+  EXPECT_FALSE(RefitScaleIsPlausible(0.0758, 13.6, o));
+  EXPECT_FALSE(RefitScaleIsPlausible(1.0, 0.25, o));
+  EXPECT_FALSE(RefitScaleIsPlausible(1.0, 0.0, o));
+  o.max_refit_scale_change = 1;
+  EXPECT_THROW(o.Check(), Error);
+}
+
 }  // namespace
 }  // namespace orchard

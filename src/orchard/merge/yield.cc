@@ -4,6 +4,7 @@
 #include <cmath>
 #include <map>
 #include <sstream>
+#include <tuple>
 
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
@@ -143,6 +144,18 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
            " share ", faces.best_inliers,
            " matched features, opposite faces share few): film the back from the other side of the row");
   }
+  // A registration that fails after a side's reconstruction warned says so:
+  // the cause is then more likely that side's poses than the row.
+  const auto fail_naming_broken_sides = [&](const Error& e) {
+    std::string broken;
+    for (const auto& [name, s, dir] : {std::tuple<std::string, const SideSummary*, fs::path>{"front", &y.front_side, front.out},
+                                       {"back", &y.back_side, back.out}})
+      if (!s->warnings.empty())
+        broken += "; the " + name + " side's reconstruction warned " + std::to_string(s->warnings.size()) +
+                  " time(s) (first: " + s->warnings.front() + "; all in " + (dir / "side.json").string() +
+                  "): it is likely broken";
+    Fail(e.what(), broken);
+  };
   SideCloud front_cloud = LoadSideCloud(front.out, "front");
   SideCloud back_cloud = LoadSideCloud(back.out, "back");
   RowRegistrationOptions row_options = o.row;
@@ -152,7 +165,12 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
     // Ground planes level and coincident, scales alike: the side's own
     // ground fit can take the canopy's lower edge for the ground.
     for (SideCloud* cloud : {&front_cloud, &back_cloud}) {
-      const Levelling l = LevelOnSparseGround(cloud, row_options);
+      Levelling l;
+      try {
+        l = LevelOnSparseGround(cloud, row_options);
+      } catch (const Error& e) {
+        fail_naming_broken_sides(e);
+      }
       if (l.ground_points == 0) continue;
       levelling[cloud->name] = {{"changed", l.changed}, {"ground_height_m", l.ground_height},
                                 {"tilt_deg", l.tilt_deg}, {"scale", l.scale}, {"ground_points", l.ground_points}};
@@ -189,9 +207,14 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
         }
       }
     } catch (const Error& fruit_error) {
-      if (!o.row_registration || front_cloud.sparse.empty() || back_cloud.sparse.empty()) throw;
+      if (!o.row_registration || front_cloud.sparse.empty() || back_cloud.sparse.empty())
+        fail_naming_broken_sides(fruit_error);
       spdlog::info("fruit registration failed ({}); registering on the row", fruit_error.what());
-      y.registration = RegisterSidesOnRow(front_cloud, back_cloud, row_options);
+      try {
+        y.registration = RegisterSidesOnRow(front_cloud, back_cloud, row_options);
+      } catch (const Error& e) {
+        fail_naming_broken_sides(e);
+      }
       method = "row: levelled grounds, canopy profiles along the row, " +
                std::string(y.registration.across_assumed ? "across assumed (canopy centre plane)"
                                                          : "across from shared fruit clusters");
