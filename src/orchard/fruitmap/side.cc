@@ -672,28 +672,31 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
       std::vector<CameraView> refit_views;
       double refit_scale = 1;
       const Plane refit_ground = metric(*refit, &refit_views, &refit_scale);
-      ClusterResult refit_r = CountFruitClusters(refit_views, frames, refit_ground, clusters);
-      ReconstructionCheck refit_check = CheckReconstruction(refit_views, refit_ground, &model, o.reconstruction_check);
-      CheckFruitAboveGround(fruit_of(refit_r), refit_ground, o.reconstruction_check, &refit_check);
-      if (!RefitScaleIsPlausible(scale, refit_scale, o)) {
+      if (!RefitScaleIsPlausible(scale, refit_scale, o)) {  // not counted again: it would not be kept
         char note[240];
         std::snprintf(note, sizeof note,
                       "a ground plane fitted again below the fruit would change the scale %.3g -> %.3g, more than "
                       "%.3gx: the first fit is kept (the reconstruction itself is likely broken)",
                       scale, refit_scale, o.max_refit_scale_change);
         check.warnings.push_back(note);
-      } else if (refit_check.fruit_below_ground < check.fruit_below_ground) {
-        char note[200];
-        std::snprintf(note, sizeof note,
-                      "the ground plane was fitted again below the fruit (%.0f%% of the fruit points lay below the "
-                      "first fit; scale %.3g -> %.3g)",
-                      100 * check.fruit_below_ground, scale, refit_scale);
-        refit_check.warnings.insert(refit_check.warnings.begin(), note);
-        ground = refit_ground, views = refit_views, scale = refit_scale, r = std::move(refit_r);
-        check = std::move(refit_check);
-        logged = 0;
-        ground_source = "fitted again to " + std::to_string(inliers) + " of " + std::to_string(pts.size()) +
-                        " sparse points, below the fruit";
+      } else {
+        ClusterResult refit_r = CountFruitClusters(refit_views, frames, refit_ground, clusters);
+        ReconstructionCheck refit_check =
+            CheckReconstruction(refit_views, refit_ground, &model, o.reconstruction_check);
+        CheckFruitAboveGround(fruit_of(refit_r), refit_ground, o.reconstruction_check, &refit_check);
+        if (refit_check.fruit_below_ground < check.fruit_below_ground) {
+          char note[200];
+          std::snprintf(note, sizeof note,
+                        "the ground plane was fitted again below the fruit (%.0f%% of the fruit points lay below the "
+                        "first fit; scale %.3g -> %.3g)",
+                        100 * check.fruit_below_ground, scale, refit_scale);
+          refit_check.warnings.insert(refit_check.warnings.begin(), note);
+          ground = refit_ground, views = refit_views, scale = refit_scale, r = std::move(refit_r);
+          check = std::move(refit_check);
+          logged = 0;
+          ground_source = "fitted again to " + std::to_string(inliers) + " of " + std::to_string(pts.size()) +
+                          " sparse points, below the fruit";
+        }
       }
     }
   }
