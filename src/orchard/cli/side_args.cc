@@ -22,6 +22,12 @@ void AddSideOptions(CLI::App* cmd, SideOptions* options) {
   cmd->add_option("--max-frames", o.frames.max_frames, "Stop after this many frames (0 = all)")->capture_default_str();
   cmd->add_option("--camera-model", o.colmap.camera_model, "COLMAP camera model")->capture_default_str();
   cmd->add_option("--colmap", o.colmap.colmap, "COLMAP executable")->capture_default_str();
+  cmd->add_option("--colmap-seed", o.colmap.random_seed, "Random seed of COLMAP's mapper (its first run)")
+      ->capture_default_str();
+  cmd->add_option("--mapper-attempts", o.colmap.mapper_attempts,
+                  "Run COLMAP's mapper up to this many times, a new seed each, while the model looks broken or "
+                  "leaves frames out; the best is kept")
+      ->capture_default_str();
   cmd->add_option("--camera-height", o.camera_height, "Camera height above the ground (m): the scale")
       ->capture_default_str();
   cmd->add_option("--ground-below-penalty", o.ground.below_penalty,

@@ -536,6 +536,91 @@ void WriteOutputs(const fs::path& out, const std::vector<fs::path>& image_paths,
 
 }  // namespace
 
+namespace {
+
+// A pose model made metric: its ground plane (fitted, or given) and the
+// scale from the camera height, with the check of the camera path.
+struct MetricPoses {
+  std::vector<CameraView> model_views, views;  // in the model's frame; in metres
+  std::vector<Eigen::Vector3d> pts, centres;   // sparse points and cameras, model frame
+  Plane ground;                                // in metres
+  std::string ground_source;
+  double scale = 1;
+  ReconstructionCheck check;
+};
+
+// `plane` (model frame) and `model_views` scaled to metres by the camera
+// height over the plane, or kept when `rescale` is false.
+Plane ScaledToMetres(Plane plane, const std::vector<CameraView>& model_views, bool rescale, double camera_height,
+                     std::vector<CameraView>* scaled, double* s) {
+  *scaled = model_views;
+  *s = rescale ? ScaleFromCameraHeight(plane, *scaled, camera_height) : 1;
+  ScaleViews(*s, scaled);
+  plane.d *= *s;
+  return plane;
+}
+
+MetricPoses MakeMetric(const ColmapModel& model, const SideInputs& in, const SideOptions& o, bool rescale) {
+  MetricPoses m;
+  m.model_views = ViewsFromColmapModel(model);
+  if (static_cast<int>(m.model_views.size()) < o.colmap.min_registered)
+    Fail("only ", m.model_views.size(), " frames have poses (need ", o.colmap.min_registered, ")");
+  Plane ground;
+  if (in.ground) {
+    ground = *in.ground;
+    m.ground_source = "given";
+  } else {
+    for (const auto& [id, p] : model.points3D) m.pts.push_back(p.xyz);
+    for (const auto& v : m.model_views) m.centres.push_back(v.Center());
+    if (static_cast<int>(m.pts.size()) < o.ground.min_inliers)
+      Fail("the pose model has ", m.pts.size(), " 3D points, too few to fit the ground plane: give the ground plane (orchard side --ground-plane)");
+    int inliers = 0;
+    ground = FitGroundPlane(m.pts, m.centres, MeanCameraUp(m.model_views), o.ground, &inliers);
+    m.ground_source = "fitted to " + std::to_string(inliers) + " of " + std::to_string(m.pts.size()) + " sparse points";
+  }
+  m.ground = ScaledToMetres(ground, m.model_views, rescale, o.camera_height, &m.views, &m.scale);
+  m.check = CheckReconstruction(m.views, m.ground, &model, o.reconstruction_check);
+  return m;
+}
+
+// COLMAP on the selected frames: features and matches once, then the mapper
+// with seeds random_seed, random_seed + 1, ... while its model has warnings
+// or leaves frames out (BestAttempt). Each attempt is described in
+// `attempts` (seed, frames registered, warnings or the error).
+ColmapModel ReconstructSide(const fs::path& image_dir, const SideInputs& in, const SideOptions& o, Json* attempts) {
+  const fs::path workspace = in.out / "colmap";
+  MatchColmapFeatures(image_dir, workspace, o.colmap);
+  std::map<int, ColmapModel> models;
+  *attempts = Json::array();
+  const int best = BestAttempt(
+      [&](int k) {
+        ColmapRunnerOptions c = o.colmap;
+        c.random_seed += k;
+        if (k > 0) spdlog::info("running COLMAP's mapper again, with seed {}", c.random_seed);
+        Json a = {{"seed", c.random_seed}};
+        try {
+          ColmapRunResult run = MapColmap(image_dir, workspace, c);
+          const MetricPoses m = MakeMetric(run.model, in, o, true);
+          a["registered"] = run.model.images.size();
+          a["warnings"] = m.check.warnings;
+          attempts->push_back(a);
+          models[k] = std::move(run.model);
+          // A warning weighs more than every frame left out.
+          return static_cast<int>(m.check.warnings.size() * (run.num_input_images + 1) + run.unregistered.size());
+        } catch (const Error& e) {
+          a["error"] = e.what();
+          attempts->push_back(a);
+          throw;
+        }
+      },
+      o.colmap.mapper_attempts);
+  if (attempts->size() > 1)
+    spdlog::info("kept COLMAP's model of seed {} ({} mapper runs)", o.colmap.random_seed + best, attempts->size());
+  return std::move(models.at(best));
+}
+
+}  // namespace
+
 SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   o.Check();
   if (in.out.empty()) Fail("no output folder");
@@ -551,6 +636,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   fs::path image_dir;
   int num_frames = 0;
   bool rescale = o.rescale_given_poses;
+  Json mapper_attempts;  // COLMAP's mapper runs (ReconstructSide); null with given poses
   if (!in.poses.empty()) {
     model = ReadColmapModel(in.poses);
     if (fs::is_directory(in.input)) {
@@ -584,49 +670,29 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
       spdlog::info("reusing the reconstruction in {}", sparse.string());
       model = ReadColmapTextModel(sparse);
     } else {
-      const ColmapRunResult run = RunColmap(image_dir, in.out / "colmap", o.colmap);
-      model = run.model;
+      model = ReconstructSide(image_dir, in, o, &mapper_attempts);
       WriteColmapTextModel(model, sparse);
+      WriteTextFileAtomic(sparse / "mapper_attempts.json", mapper_attempts.dump(2) + "\n");
       WriteTextFileAtomic(sparse / "frames.txt", list.str());
     }
+    if (mapper_attempts.is_null() && fs::exists(sparse / "mapper_attempts.json"))
+      mapper_attempts = Json::parse(ReadTextFile(sparse / "mapper_attempts.json"), nullptr, false);
     std::set<std::string> posed;
     for (const auto& [id, image] : model.images) posed.insert(image.name);
     for (const auto& n : names)
       if (!posed.count(n)) unregistered.push_back(n);
   }
-  std::vector<CameraView> views = ViewsFromColmapModel(model);
-  if (static_cast<int>(views.size()) < o.colmap.min_registered)
-    Fail("only ", views.size(), " frames have poses (need ", o.colmap.min_registered, ")");
+  MetricPoses metric = MakeMetric(model, in, o, rescale);
   if (!unregistered.empty())
     spdlog::warn("{} of {} frames have no pose and are left out", unregistered.size(), num_frames);
-  // Ground plane and scale.
-  Plane ground;
-  std::string ground_source;
-  std::vector<Eigen::Vector3d> pts, centres;  // sparse points and cameras in the model's frame
-  const std::vector<CameraView> model_views = views;
-  if (in.ground) {
-    ground = *in.ground;
-    ground_source = "given";
-  } else {
-    for (const auto& [id, p] : model.points3D) pts.push_back(p.xyz);
-    for (const auto& v : views) centres.push_back(v.Center());
-    if (static_cast<int>(pts.size()) < o.ground.min_inliers)
-      Fail("the pose model has ", pts.size(), " 3D points, too few to fit the ground plane: give the ground plane (orchard side --ground-plane)");
-    int inliers = 0;
-    ground = FitGroundPlane(pts, centres, MeanCameraUp(views), o.ground, &inliers);
-    ground_source = "fitted to " + std::to_string(inliers) + " of " + std::to_string(pts.size()) + " sparse points";
-  }
-  // The views scaled to metres over `plane` (model frame), and the plane with them.
-  const auto metric = [&](Plane plane, std::vector<CameraView>* scaled, double* s) {
-    *scaled = model_views;
-    *s = rescale ? ScaleFromCameraHeight(plane, *scaled, o.camera_height) : 1;
-    ScaleViews(*s, scaled);
-    plane.d *= *s;
-    return plane;
-  };
-  double scale = 1;
-  ground = metric(ground, &views, &scale);
-  ReconstructionCheck check = CheckReconstruction(views, ground, &model, o.reconstruction_check);
+  std::vector<CameraView> views = metric.views;
+  const std::vector<CameraView>& model_views = metric.model_views;
+  const std::vector<Eigen::Vector3d>& pts = metric.pts;
+  const std::vector<Eigen::Vector3d>& centres = metric.centres;
+  Plane ground = metric.ground;
+  std::string ground_source = metric.ground_source;
+  double scale = metric.scale;
+  ReconstructionCheck check = std::move(metric.check);
   for (const auto& w : check.warnings) spdlog::warn("reconstruction: {}", w);
   s.poses_s = stopwatch.Lap();
   // Fruit per frame (cached).
@@ -671,7 +737,8 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
     if (refit) {
       std::vector<CameraView> refit_views;
       double refit_scale = 1;
-      const Plane refit_ground = metric(*refit, &refit_views, &refit_scale);
+      const Plane refit_ground =
+          ScaledToMetres(*refit, model_views, rescale, o.camera_height, &refit_views, &refit_scale);
       if (!RefitScaleIsPlausible(scale, refit_scale, o)) {  // not counted again: it would not be kept
         char note[240];
         std::snprintf(note, sizeof note,
@@ -739,6 +806,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
       {"frames", {{"input", num_frames}, {"registered", s.frames_registered}, {"used", s.frames_used},
                   {"unregistered", unregistered}}},
       {"poses", in.poses.empty() ? "colmap" : in.poses.string()},
+      {"mapper_attempts", mapper_attempts},
       {"detector", in.detector_name},
       {"counter", in.counter_name},
       {"best_views_by", BestViewsName(clusters.best_views_by)},

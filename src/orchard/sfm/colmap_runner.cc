@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <optional>
 #include <set>
 
 #include <spdlog/spdlog.h>
@@ -33,6 +34,7 @@ void ColmapRunnerOptions::Check() const {
                        "camera model must be SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL or RADIAL, got ", camera_model);
   ORCHARD_CHECK_OPTION(max_num_features > 0, "max_num_features must be positive, got ", max_num_features);
   ORCHARD_CHECK_OPTION(overlap >= 1, "matching overlap must be at least 1, got ", overlap);
+  ORCHARD_CHECK_OPTION(mapper_attempts >= 1, "mapper attempts must be at least 1, got ", mapper_attempts);
   ORCHARD_CHECK_OPTION(min_registered >= 2, "min registered frames must be at least 2, got ", min_registered);
 }
 
@@ -40,7 +42,7 @@ bool ColmapAvailable(const std::string& colmap) {
   return std::system((Quote(colmap) + " help > /dev/null 2>&1").c_str()) == 0;
 }
 
-ColmapRunResult RunColmap(const fs::path& image_dir, const fs::path& workspace, const ColmapRunnerOptions& options) {
+void MatchColmapFeatures(const fs::path& image_dir, const fs::path& workspace, const ColmapRunnerOptions& options) {
   options.Check();
   const std::vector<fs::path> images = ListImages(image_dir);
   if (static_cast<int>(images.size()) < options.min_registered)
@@ -50,7 +52,7 @@ ColmapRunResult RunColmap(const fs::path& image_dir, const fs::path& workspace, 
     Fail("the colmap program '", options.colmap, "' cannot be run (install colmap, or give poses with --poses)");
   // A fresh workspace: a database from an earlier, different run would be reused.
   fs::remove_all(workspace);
-  fs::create_directories(workspace / "sparse");
+  fs::create_directories(workspace);
   const fs::path log = workspace / "colmap.log";
   const std::string db = Quote((workspace / "database.db").string());
   const std::string exe = Quote(options.colmap);
@@ -65,9 +67,27 @@ ColmapRunResult RunColmap(const fs::path& image_dir, const fs::path& workspace, 
           exe + " sequential_matcher --database_path " + db +
               " --SiftMatching.use_gpu 0 --SequentialMatching.overlap " + std::to_string(options.overlap),
           log);
+}
+
+ColmapRunResult RunColmap(const fs::path& image_dir, const fs::path& workspace, const ColmapRunnerOptions& options) {
+  MatchColmapFeatures(image_dir, workspace, options);
+  return MapColmap(image_dir, workspace, options);
+}
+
+ColmapRunResult MapColmap(const fs::path& image_dir, const fs::path& workspace, const ColmapRunnerOptions& options) {
+  options.Check();
+  const std::vector<fs::path> images = ListImages(image_dir);
+  const fs::path log = workspace / "colmap.log";
+  const std::string exe = Quote(options.colmap);
+  if (!fs::exists(workspace / "database.db")) Fail("no COLMAP database in ", workspace.string());
+  // The models of an earlier mapper run would be read as this one's.
+  for (const auto& entry : fs::directory_iterator(workspace))
+    if (entry.is_directory()) fs::remove_all(entry.path());
+  fs::create_directories(workspace / "sparse");
   RunStep("mapper",
-          exe + " mapper --database_path " + db + " --image_path " + Quote(image_dir.string()) + " --output_path " +
-              Quote((workspace / "sparse").string()),
+          exe + " mapper --database_path " + Quote((workspace / "database.db").string()) + " --image_path " +
+              Quote(image_dir.string()) + " --output_path " + Quote((workspace / "sparse").string()) +
+              " --random_seed " + std::to_string(options.random_seed),
           log);
   ColmapRunResult result;
   result.num_input_images = static_cast<int>(images.size());
@@ -101,6 +121,24 @@ ColmapRunResult RunColmap(const fs::path& image_dir, const fs::path& workspace, 
     spdlog::warn("COLMAP left {} of {} frames out of the largest of {} model(s)", result.unregistered.size(),
                  images.size(), result.num_models);
   return result;
+}
+
+int BestAttempt(const std::function<int(int)>& attempt, int max_attempts) {
+  int best = -1, best_problems = 0;
+  std::optional<Error> first_error;
+  for (int k = 0; k < max_attempts && (best < 0 || best_problems > 0); ++k) {
+    try {
+      const int problems = attempt(k);
+      if (best < 0 || problems < best_problems) best = k, best_problems = problems;
+    } catch (const Error& e) {
+      if (!first_error) first_error = e;
+    }
+  }
+  if (best < 0) {
+    if (first_error) throw *first_error;
+    Fail("no attempt was made");
+  }
+  return best;
 }
 
 }  // namespace orchard

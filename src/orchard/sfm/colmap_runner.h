@@ -6,6 +6,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,16 @@ struct ColmapRunnerOptions {
   int first_octave = 0;
   // Sequential matching: each frame against this many following frames.
   int overlap = 5;
+  // The mapper's random seed (COLMAP's --random_seed). Which model the
+  // mapper builds depends on it: on seed 268's back the same matches gave a
+  // model folded on itself (29 of 41 frames) with seed 0 and all 41 frames at
+  // 0.9 cm pose error with seeds 1 and 2.
+  int random_seed = 0;
+  // Mapper runs in all (seeds random_seed, random_seed + 1, ...) while the
+  // model looks broken or leaves frames out (orchard side decides: the
+  // reconstruction check's warnings); the best is kept. Only the mapper runs
+  // again, on the same matches: seconds against the minutes of matching.
+  int mapper_attempts = 3;
   // Fewest registered frames for the reconstruction to be usable.
   int min_registered = 5;
   void Check() const;
@@ -42,10 +53,26 @@ struct ColmapRunResult {
 };
 
 // Runs COLMAP on the images in `image_dir` with its database, logs and models
-// in `workspace` (colmap.log holds COLMAP's output). Throws orchard::Error
-// when colmap is missing or fails, when no model is produced, or when fewer
-// than min_registered frames are registered.
+// in `workspace` (colmap.log holds COLMAP's output): MatchColmapFeatures,
+// then MapColmap. Throws orchard::Error when colmap is missing or fails,
+// when no model is produced, or when fewer than min_registered frames are
+// registered.
 ColmapRunResult RunColmap(const fs::path& image_dir, const fs::path& workspace, const ColmapRunnerOptions& options);
+
+// Feature extraction and sequential matching into a fresh `workspace`.
+void MatchColmapFeatures(const fs::path& image_dir, const fs::path& workspace, const ColmapRunnerOptions& options);
+
+// The mapper alone, on the matches MatchColmapFeatures left in `workspace`
+// (its earlier models are replaced), with options.random_seed.
+ColmapRunResult MapColmap(const fs::path& image_dir, const fs::path& workspace, const ColmapRunnerOptions& options);
+
+// Runs `attempt(k)` for k = 0, 1, ... until one reports no problems or
+// `max_attempts` have run, and returns the best k: the fewest problems,
+// the earliest on ties. `attempt` returns its number of problems or throws
+// orchard::Error; an attempt that throws is never the best, and when every
+// attempt throws the first one's error is thrown again. For the mapper: a
+// model that looks broken is often a matter of the seed.
+int BestAttempt(const std::function<int(int)>& attempt, int max_attempts);
 
 // True when the colmap executable can be run.
 bool ColmapAvailable(const std::string& colmap = "colmap");

@@ -36,6 +36,42 @@ TEST(ColmapRunner, TooFewFramesAndMissingProgram) {
   fs::remove_all(dir);
 }
 
+TEST(ColmapRunner, BestAttemptStopsAtTheFirstWithoutProblems) {
+  // Problems per attempt; -1 throws.
+  const auto run = [](std::vector<int> problems, int max_attempts, std::vector<int>* ran) {
+    return BestAttempt(
+        [&](int k) {
+          ran->push_back(k);
+          if (problems.at(k) < 0) Fail("attempt ", k, " failed");
+          return problems.at(k);
+        },
+        max_attempts);
+  };
+  std::vector<int> ran;
+  EXPECT_EQ(run({0, 5, 5}, 3, &ran), 0);
+  EXPECT_EQ(ran, (std::vector<int>{0}));  // no problems: no second run
+  ran.clear();
+  EXPECT_EQ(run({3, 0, 5}, 3, &ran), 1);
+  EXPECT_EQ(ran, (std::vector<int>{0, 1}));
+  ran.clear();
+  EXPECT_EQ(run({3, 1, 2}, 3, &ran), 1);  // all have problems: the fewest
+  EXPECT_EQ(ran, (std::vector<int>{0, 1, 2}));
+  ran.clear();
+  EXPECT_EQ(run({2, 2, 2}, 3, &ran), 0);  // ties: the earliest
+  ran.clear();
+  EXPECT_EQ(run({-1, 4, -1}, 3, &ran), 1);  // an attempt that throws is never the best
+  ran.clear();
+  EXPECT_EQ(run({3, 0}, 1, &ran), 0);  // one attempt allowed
+  EXPECT_EQ(ran, (std::vector<int>{0}));
+  ran.clear();
+  const std::string m = Message([&] { run({-1, -1}, 2, &ran); });
+  EXPECT_EQ(m, "attempt 0 failed");  // every attempt threw: the first error
+  EXPECT_EQ(ran, (std::vector<int>{0, 1}));
+  ColmapRunnerOptions o;
+  o.mapper_attempts = 0;
+  EXPECT_THROW(o.Check(), Error);
+}
+
 TEST(ColmapModel, MissingFilesNameThePath) {
   const fs::path dir = TempDir("model");
   const std::string m = Message([&] { ReadColmapTextModel(dir); });
