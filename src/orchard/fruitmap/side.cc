@@ -614,6 +614,7 @@ ColmapModel ReconstructSide(const fs::path& image_dir, const SideInputs& in, con
         }
       },
       o.colmap.mapper_attempts);
+  for (auto& a : *attempts) a["kept"] = a.at("seed").get<int>() == o.colmap.random_seed + best;
   if (attempts->size() > 1)
     spdlog::info("kept COLMAP's model of seed {} ({} mapper runs)", o.colmap.random_seed + best, attempts->size());
   return std::move(models.at(best));
@@ -784,6 +785,15 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   s.single_frame_sum = r.single_frame_sum;
   s.frames_used = static_cast<int>(views.size());
   s.frames_registered = static_cast<int>(views.size());
+  s.poses = in.poses.empty() ? "COLMAP" : "given (" + in.poses.string() + ")";
+  if (mapper_attempts.is_array() && mapper_attempts.size() > 1) {
+    int kept_seed = -1;
+    for (const auto& a : mapper_attempts)
+      if (a.value("kept", false)) kept_seed = a.at("seed").get<int>();
+    s.poses += ", its mapper run " + std::to_string(mapper_attempts.size()) + " times (the first model " +
+               (mapper_attempts.front().contains("error") ? "failed" : "had warnings or left frames out") +
+               (kept_seed >= 0 ? "; seed " + std::to_string(kept_seed) + " kept)" : ")");
+  }
   s.frame_paths = image_paths;
   std::map<std::string, int> removed;
   for (const auto& c : r.clusters) {

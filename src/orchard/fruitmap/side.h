@@ -258,6 +258,9 @@ struct SideSummary {
   int one_side_count = 0;
   int single_frame_sum = 0;
   int frames_used = 0, frames_registered = 0;
+  // Where the poses came from, in words: "given (PATH)", or "COLMAP" with
+  // the mapper's runs when it ran more than once (side.json: mapper_attempts).
+  std::string poses;
   int clusters_kept = 0, clusters_removed = 0;
   // Wall-clock seconds of the stages (also in side.json): frames and poses,
   // fruit per frame (detection and counting, or the cache), the 3D stage,

@@ -124,6 +124,16 @@ std::string YieldReportHtml(const nlohmann::json& y, const std::vector<MapCluste
   }
   h << "</table>\n";
   for (const auto& w : y.at("warnings")) h << "<p class='warn'>Warning: " << Escape(w.get<std::string>()) << "</p>\n";
+  if (y.contains("sides")) {  // where each side's camera poses came from
+    std::string poses;
+    for (const char* side : {"front", "back"}) {
+      if (!y.at("sides").contains(side)) continue;
+      const nlohmann::json& s = y.at("sides").at(side);
+      poses += std::string(poses.empty() ? "" : "; ") + side + ": " + s.value("poses", std::string("?")) + ", " +
+               std::to_string(s.value("frames_used", 0)) + " frames used";
+    }
+    h << "<p>Poses: " << Escape(poses) << ".</p>\n";
+  }
   h << "<h2>Map</h2>\n" << MapSvg(y, clusters);
   const auto& a = y.at("alignment");
   h << "<h2>Alignment of the two sides</h2>\n<table>"

@@ -45,6 +45,7 @@ Json SideJson(const SideSummary& s, const SideCloud& cloud) {
           {"merge_clusters_count", s.count},
           {"single_frame_sum", s.single_frame_sum},
           {"frames_used", s.frames_used},
+          {"poses", s.poses},
           {"clusters_kept", s.clusters_kept},
           {"clusters_removed", s.clusters_removed},
           {"clusters_loaded", cloud.clusters.size()}};

@@ -97,6 +97,8 @@ TEST_F(YieldTest, MergesBothSidesAndResumes) {
   for (const char* f : {"clusters.csv", "row.ply", "report.html", "front/side.json", "back/side.json"})
     EXPECT_TRUE(fs::exists(*dir_ / "out" / f)) << f;
   EXPECT_NE(ReadTextFile(*dir_ / "out/report.html").find("<svg"), std::string::npos);
+  EXPECT_EQ(j.at("sides").at("back").at("poses").get<std::string>().rfind("given (", 0), 0u);
+  EXPECT_NE(ReadTextFile(*dir_ / "out/report.html").find("Poses: front: given ("), std::string::npos);
 
   // Interrupted during the back side: its results and part of its cache are
   // gone, the front side's cache is complete.
