@@ -26,7 +26,7 @@ void AddSideOptions(CLI::App* cmd, SideOptions* options) {
       ->capture_default_str();
   cmd->add_option("--mapper-attempts", o.colmap.mapper_attempts,
                   "Run COLMAP's mapper up to this many times, a new seed each, while the model looks broken or "
-                  "leaves frames out; the best is kept")
+                  "leaves over 5% of the frames out; the best is kept")
       ->capture_default_str();
   cmd->add_option("--camera-height", o.camera_height, "Camera height above the ground (m): the scale")
       ->capture_default_str();

@@ -585,7 +585,7 @@ MetricPoses MakeMetric(const ColmapModel& model, const SideInputs& in, const Sid
 
 // COLMAP on the selected frames: features and matches once, then the mapper
 // with seeds random_seed, random_seed + 1, ... while its model has warnings
-// or leaves frames out (BestAttempt). Each attempt is described in
+// or leaves too many frames out (BestAttempt). Each attempt is described in
 // `attempts` (seed, frames registered, warnings or the error).
 ColmapModel ReconstructSide(const fs::path& image_dir, const SideInputs& in, const SideOptions& o, Json* attempts) {
   const fs::path workspace = in.out / "colmap";
@@ -605,8 +605,11 @@ ColmapModel ReconstructSide(const fs::path& image_dir, const SideInputs& in, con
           a["warnings"] = m.check.warnings;
           attempts->push_back(a);
           models[k] = std::move(run.model);
+          const int left_out = static_cast<int>(run.unregistered.size());
+          if (m.check.warnings.empty() && left_out <= o.colmap.retry_unregistered_fraction * run.num_input_images)
+            return 0;  // good enough: no further run
           // A warning weighs more than every frame left out.
-          return static_cast<int>(m.check.warnings.size() * (run.num_input_images + 1) + run.unregistered.size());
+          return static_cast<int>(m.check.warnings.size()) * (run.num_input_images + 1) + left_out;
         } catch (const Error& e) {
           a["error"] = e.what();
           attempts->push_back(a);

@@ -35,6 +35,8 @@ void ColmapRunnerOptions::Check() const {
   ORCHARD_CHECK_OPTION(max_num_features > 0, "max_num_features must be positive, got ", max_num_features);
   ORCHARD_CHECK_OPTION(overlap >= 1, "matching overlap must be at least 1, got ", overlap);
   ORCHARD_CHECK_OPTION(mapper_attempts >= 1, "mapper attempts must be at least 1, got ", mapper_attempts);
+  ORCHARD_CHECK_OPTION(retry_unregistered_fraction >= 0 && retry_unregistered_fraction <= 1,
+                       "retry unregistered fraction must be in [0, 1], got ", retry_unregistered_fraction);
   ORCHARD_CHECK_OPTION(min_registered >= 2, "min registered frames must be at least 2, got ", min_registered);
 }
 

@@ -35,10 +35,13 @@ struct ColmapRunnerOptions {
   // 0.9 cm pose error with seeds 1 and 2.
   int random_seed = 0;
   // Mapper runs in all (seeds random_seed, random_seed + 1, ...) while the
-  // model looks broken or leaves frames out (orchard side decides: the
-  // reconstruction check's warnings); the best is kept. Only the mapper runs
-  // again, on the same matches: seconds against the minutes of matching.
+  // model looks broken (orchard side decides: the reconstruction check's
+  // warnings) or leaves more than `retry_unregistered_fraction` of the frames
+  // out; the best is kept. Only the mapper runs again, on the same matches:
+  // seconds against the minutes of matching on a short row, but minutes on a
+  // long video, hence no retry for the odd blurred frame that no seed registers.
   int mapper_attempts = 3;
+  double retry_unregistered_fraction = 0.05;
   // Fewest registered frames for the reconstruction to be usable.
   int min_registered = 5;
   void Check() const;
