@@ -649,11 +649,19 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
       image_dir = in.out / "frames";
       SelectFrames(in.input, FrameSelectionOptions{}, image_dir);
     }
-    std::set<std::string> names;
-    for (const auto& p : ListImages(image_dir)) names.insert(p.filename().string());
+    if (o.frames.method == "motion") spdlog::warn("frame selection by motion is not applied to given poses; use --step");
+    std::set<std::string> names, skipped;
+    const std::vector<fs::path> listed = ListImages(image_dir);
+    // --step thins given poses too (frames denser than the 3D stage is tuned
+    // to count high; CheckFrameSpacing): every step-th frame in name order.
+    for (size_t i = 0; i < listed.size(); ++i)
+      (i % o.frames.step == 0 ? names : skipped).insert(listed[i].filename().string());
     num_frames = static_cast<int>(names.size());
     for (const auto& [id, image] : model.images)
-      if (!names.count(image.name)) Fail("pose model ", in.poses.string(), " names frame ", image.name, ", which is not in ", image_dir.string());
+      if (!names.count(image.name) && !skipped.count(image.name))
+        Fail("pose model ", in.poses.string(), " names frame ", image.name, ", which is not in ", image_dir.string());
+    for (auto it = model.images.begin(); it != model.images.end();)
+      it = skipped.count(it->second.name) ? model.images.erase(it) : std::next(it);
     std::set<std::string> posed;
     for (const auto& [id, image] : model.images) posed.insert(image.name);
     for (const auto& n : names)
@@ -777,6 +785,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   for (const auto& c : r.clusters)
     if (c.count == 1 && (c.status == "kept" || c.status == "small")) single_apple_radii.push_back(c.apple_radius_seen);
   CheckAppleSize(std::move(single_apple_radii), clusters.points.apple_radius, o.reconstruction_check, &check);
+  CheckFrameSpacing(r.row_distance, o.reconstruction_check, &check);
   for (size_t i = logged; i < check.warnings.size(); ++i) spdlog::warn("reconstruction: {}", check.warnings[i]);
   s.one_side_count =
       o.one_side_clusters ? CountFruitClusters(views, frames, ground, resolved(*o.one_side_clusters), r.points).count
@@ -838,7 +847,8 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
                           {"reprojection_error_px", check.reprojection_error_px},
                           {"fruit_below_ground", check.fruit_below_ground},
                           {"apple_radius", check.apple_radius},
-                          {"single_apples", check.single_apples}}},
+                          {"single_apples", check.single_apples},
+                          {"frame_spacing", check.frame_spacing}}},
       {"row_distance", r.row_distance},
       {"depth_cutoff", r.depth_cutoff},
       {"depth_cutoff_from", r.depth_cutoff_from_gap ? "gap" : "margin"},

@@ -69,6 +69,8 @@ TEST_F(SideTest, CountsTheVisibleApplesOnceFromTruePosesAndMasks) {
   // Single apples measure an apple's size (3-5 cm; 4.1-4.6 cm on fresh rows).
   EXPECT_GT(check.at("single_apples").get<int>(), 10);
   EXPECT_NEAR(check.at("apple_radius").get<double>(), 0.043, 0.01);
+  // The spacing the 3D stage is tuned to (0.050-0.061 on the 4-tree rows).
+  EXPECT_NEAR(check.at("frame_spacing").get<double>(), 0.057, 0.012);
   // A rerun resumes from the cached detections and gives the same count.
   EXPECT_TRUE(fs::exists(*dir_ / "out/detections/frame_0000.json"));
   EXPECT_EQ(RunSide(Inputs("out"), o).count, s.count);
@@ -85,6 +87,20 @@ TEST_F(SideTest, WarnsWhenApplesShowTheScaleIsWrong) {
   EXPECT_LT(check.at("apple_radius").get<double>(), 0.018);
   ASSERT_FALSE(s.warnings.empty());
   EXPECT_NE(s.warnings.back().find("the scale is likely too small"), std::string::npos) << s.warnings.back();
+}
+
+TEST_F(SideTest, StepThinsGivenPosesAndSparseFramesAreWarnedAbout) {
+  SideOptions o;
+  o.frames.step = 2;  // every other frame: 25 cm apart, twice the tuned spacing
+  const SideSummary s = RunSide(Inputs("step2"), o);
+  const auto side = nlohmann::json::parse(ReadTextFile(*dir_ / "step2/side.json"));
+  EXPECT_EQ(side.at("frames").at("input").get<int>(), 11);  // frames 0, 2, ..., 20 of 21
+  EXPECT_EQ(s.frames_used, 11);
+  EXPECT_TRUE(side.at("frames").at("unregistered").empty());  // the skipped frames are not "left out"
+  EXPECT_NEAR(side.at("reconstruction").at("median_step").get<double>(), 0.25, 0.02);
+  ASSERT_FALSE(s.warnings.empty());
+  EXPECT_NE(s.warnings.back().find("the count is likely low; keep more frames"), std::string::npos)
+      << s.warnings.back();
 }
 
 TEST_F(SideTest, CommandCountsDetectorBlobsWithTheCnnByDefault) {

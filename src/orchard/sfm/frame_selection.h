@@ -19,9 +19,11 @@ struct FrameSelectionOptions {
   std::string method = "step";
   int step = 1;
   // motion: keep a frame when the median displacement of tracked corners since
-  // the last kept frame reaches this fraction of the image width (5%: about
-  // 20 kept frames per image width of travel, ~95% overlap).
-  double motion_fraction = 0.05;
+  // the last kept frame reaches this fraction of the image width. 3%: the
+  // synthetic rows' frames move 3.0-3.6% (8 frames per second), the spacing
+  // the 3D stage is tuned to (ReconstructionCheckOptions::frame_spacing_reference;
+  // 5% before the twenty-first session kept frames too sparse, counting low).
+  double motion_fraction = 0.03;
   // Stop after this many kept frames (0 = no limit).
   int max_frames = 0;
   void Check() const;

@@ -42,6 +42,9 @@ void ReconstructionCheckOptions::Check() const {
   ORCHARD_CHECK_OPTION(min_apple_size > 0 && max_apple_size > min_apple_size,
                        "reconstruction check: apple size bounds must satisfy 0 < min < max, got ", min_apple_size,
                        ", ", max_apple_size);
+  ORCHARD_CHECK_OPTION(frame_spacing_reference > 0 && min_frame_spacing > 0 && max_frame_spacing > min_frame_spacing,
+                       "reconstruction check: frame spacing bounds must satisfy 0 < min < max, got ",
+                       min_frame_spacing, ", ", max_frame_spacing);
   ORCHARD_CHECK_OPTION(min_apple_clusters >= 1, "reconstruction check: min apple clusters must be >= 1, got ",
                        min_apple_clusters);
 }
@@ -191,6 +194,23 @@ void CheckAppleSize(std::vector<double> single_apple_radii, double apple_radius,
     check->warnings.push_back(Format("single apples measure %.1f cm in radius at this scale, over %.2g times the "
                                      "expected %.1f cm: the scale is likely too large (camera height, ground plane)",
                                      100 * check->apple_radius, options.max_apple_size, 100 * apple_radius));
+}
+
+void CheckFrameSpacing(double row_distance, const ReconstructionCheckOptions& options, ReconstructionCheck* check) {
+  options.Check();
+  if (!(row_distance > 0) || !(check->median_step > 0)) return;
+  check->frame_spacing = check->median_step / row_distance;
+  const double ratio = check->frame_spacing / options.frame_spacing_reference;
+  if (ratio < options.min_frame_spacing)
+    check->warnings.push_back(Format("frames %.1f cm apart at %.2f m from the fruit, %.2g of the spacing the 3D stage "
+                                     "is tuned to: the count is likely high; keep fewer frames (--step, or "
+                                     "--frame-selection motion)",
+                                     100 * check->median_step, row_distance, ratio));
+  else if (ratio > options.max_frame_spacing)
+    check->warnings.push_back(Format("frames %.1f cm apart at %.2f m from the fruit, %.2g times the spacing the 3D "
+                                     "stage is tuned to: the count is likely low; keep more frames (a smaller --step "
+                                     "or --motion)",
+                                     100 * check->median_step, row_distance, ratio));
 }
 
 }  // namespace orchard

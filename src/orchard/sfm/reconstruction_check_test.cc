@@ -233,6 +233,26 @@ TEST(ReconstructionCheck, ApplesOfTheWrongSizeMeanAWrongScale) {
   EXPECT_THROW(CheckAppleSize(radii, 0, {}, &r), Error);
 }
 
+TEST(ReconstructionCheck, FramesTooDenseOrTooSparseForThe3DStage) {
+  ReconstructionCheck r;
+  r.median_step = 0.125;  // the synthetic rows' 8 frames per second at 1 m/s
+  CheckFrameSpacing(2.2, {}, &r);
+  EXPECT_NEAR(r.frame_spacing, 0.0568, 1e-4);
+  EXPECT_TRUE(r.warnings.empty()) << r.warnings.front();
+  r.median_step = 0.0625;  // 16 frames per second
+  CheckFrameSpacing(2.2, {}, &r);
+  EXPECT_TRUE(Warns(r, "the count is likely high; keep fewer frames"));
+  r = {};
+  r.median_step = 0.2;  // 5 frames per second
+  CheckFrameSpacing(2.2, {}, &r);
+  EXPECT_TRUE(Warns(r, "the count is likely low; keep more frames"));
+  r = {};
+  r.median_step = 0.125;
+  CheckFrameSpacing(0, {}, &r);  // no row distance: no measure
+  EXPECT_EQ(r.frame_spacing, -1);
+  EXPECT_TRUE(r.warnings.empty());
+}
+
 TEST(ReconstructionCheck, BadOptions) {
   ReconstructionCheckOptions o;
   o.max_step_ratio = 1;
