@@ -698,7 +698,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   if (!unregistered.empty())
     spdlog::warn("{} of {} frames have no pose and are left out", unregistered.size(), num_frames);
   std::vector<CameraView> views = metric.views;
-  const std::vector<CameraView>& model_views = metric.model_views;
+  std::vector<CameraView> model_views = metric.model_views;
   const std::vector<Eigen::Vector3d>& pts = metric.pts;
   const std::vector<Eigen::Vector3d>& centres = metric.centres;
   Plane ground = metric.ground;
@@ -728,6 +728,30 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   };
   const ClusterOptions clusters = resolved(o.clusters);
   ClusterResult r = CountFruitClusters(views, frames, ground, clusters);
+  // Frames much denser than the 3D stage is tuned to count high
+  // (CheckFrameSpacing): every k-th is kept and counted again. The spacing
+  // needs the row distance, which only the clusters give.
+  int thinned_every = 1;
+  const ReconstructionCheckOptions& rc = o.reconstruction_check;
+  if (o.thin_dense_frames && r.row_distance > 0 && check.median_step > 0 &&
+      check.median_step / r.row_distance < rc.min_frame_spacing * rc.frame_spacing_reference) {
+    thinned_every = std::max(2, static_cast<int>(std::lround(rc.frame_spacing_reference * r.row_distance /
+                                                               check.median_step)));
+    const auto every_kth = [thinned_every](auto* v) {
+      size_t kept = 0;
+      for (size_t i = 0; i < v->size(); i += thinned_every, ++kept)
+        if (i != kept) (*v)[kept] = std::move((*v)[i]);  // never onto itself: a self-move empties a vector
+      v->resize(kept);
+    };
+    every_kth(&views), every_kth(&model_views), every_kth(&frames), every_kth(&image_paths);
+    if (static_cast<int>(views.size()) < o.colmap.min_registered)
+      Fail("only ", views.size(), " frames left after keeping every ", thinned_every,
+           "-th of frames too dense for the 3D stage (need ", o.colmap.min_registered, ")");
+    spdlog::info("frames {:.1f} cm apart at {:.2f} m from the fruit: every {}-th used ({} frames)",
+                 100 * check.median_step, r.row_distance, thinned_every, views.size());
+    check = CheckReconstruction(views, ground, &model, rc);
+    r = CountFruitClusters(views, frames, ground, clusters);
+  }
   const auto fruit_of = [](const ClusterResult& result) {
     std::vector<Eigen::Vector3d> fruit;
     for (const auto& p : result.points) fruit.push_back(p.xyz);
@@ -796,7 +820,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   s.count = r.count;
   s.single_frame_sum = r.single_frame_sum;
   s.frames_used = static_cast<int>(views.size());
-  s.frames_registered = static_cast<int>(views.size());
+  s.frames_registered = static_cast<int>(metric.model_views.size());
   s.poses = in.poses.empty() ? "COLMAP" : "given (" + in.poses.string() + ")";
   if (mapper_attempts.is_array() && mapper_attempts.size() > 1) {
     int kept_seed = -1;
@@ -826,6 +850,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
       {"one_side_count", s.one_side_count},
       {"single_frame_sum", s.single_frame_sum},
       {"frames", {{"input", num_frames}, {"registered", s.frames_registered}, {"used", s.frames_used},
+                  {"every", thinned_every},
                   {"unregistered", unregistered}}},
       {"poses", in.poses.empty() ? "colmap" : in.poses.string()},
       {"mapper_attempts", mapper_attempts},

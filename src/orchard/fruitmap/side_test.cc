@@ -103,6 +103,44 @@ TEST_F(SideTest, StepThinsGivenPosesAndSparseFramesAreWarnedAbout) {
       << s.warnings.back();
 }
 
+TEST(SideDenseFramesTest, FramesTwiceTooDenseAreThinnedToEveryOther) {
+  // 16 frames per second: 6.25 cm steps, half the spacing the 3D stage is tuned to.
+  const fs::path dir = fs::temp_directory_path() / ("orchard_side_dense_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  synth::SynthOptions so;
+  so.seed = 5;
+  so.scene.num_trees = 2;  // one tree: the next row holds more of the fruit, and its distance is taken for the row's
+  so.camera.sides = "front";
+  so.camera.fps = 16;
+  so.patch_every = 0;
+  so.progress = false;
+  synth::RunSynth(so, dir / "synth");
+  SideInputs in;
+  in.input = dir / "synth/front/images";
+  in.poses = dir / "synth/front/sparse";
+  in.masks = dir / "synth/front/masks";
+  in.ground = ParseGroundPlane((dir / "synth/front/scene.json").string());
+  in.out = dir / "out";
+  SideOptions o;
+  o.draw_every = 0;
+  const SideSummary s = RunSide(in, o);
+  const auto side = nlohmann::json::parse(ReadTextFile(dir / "out/side.json"));
+  const int input = side.at("frames").at("input").get<int>();
+  EXPECT_EQ(side.at("frames").at("every").get<int>(), 2);
+  EXPECT_EQ(s.frames_used, (input + 1) / 2);
+  EXPECT_EQ(s.frames_registered, input);
+  EXPECT_NEAR(side.at("reconstruction").at("median_step").get<double>(), 0.125, 0.01);  // of the frames used
+  EXPECT_TRUE(s.warnings.empty()) << s.warnings.front();  // the thinned spacing is the tuned one
+  // Without thinning the spacing is warned about.
+  o.thin_dense_frames = false;
+  in.out = dir / "all";
+  const SideSummary all = RunSide(in, o);
+  EXPECT_EQ(all.frames_used, input);
+  ASSERT_FALSE(all.warnings.empty());
+  EXPECT_NE(all.warnings.back().find("the count is likely high"), std::string::npos) << all.warnings.back();
+  fs::remove_all(dir);
+}
+
 TEST_F(SideTest, CommandCountsDetectorBlobsWithTheCnnByDefault) {
   // `orchard side` without --counter: instance masks are one apple per blob,
   // a detector's blobs go to the CNN counter (as in `orchard yield`; before,
