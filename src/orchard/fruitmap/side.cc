@@ -534,10 +534,6 @@ void WriteOutputs(const fs::path& out, const std::vector<fs::path>& image_paths,
   }
 }
 
-}  // namespace
-
-namespace {
-
 // A pose model made metric: its ground plane (fitted, or given) and the
 // scale from the camera height, with the check of the camera path.
 struct MetricPoses {
