@@ -92,6 +92,9 @@ void AddSideOptions(CLI::App* cmd, SideOptions* options) {
       ->capture_default_str();
   cmd->add_option("--row-distance", o.clusters.row_distance, "Camera path to row centre (m), 0 = estimate")
       ->capture_default_str();
+  cmd->add_option("--row-min-share", o.clusters.row_min_share,
+                  "Row distance estimate: the nearest stretch of fruit holding this share of the fullest one's")
+      ->capture_default_str();
   cmd->add_option("--next-row-gap", o.clusters.next_row_gap,
                   "Next row: behind the middle of the first fruit-free gap this long (m) behind the row, 0 = margin")
       ->capture_default_str();

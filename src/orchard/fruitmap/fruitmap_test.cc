@@ -151,6 +151,31 @@ void AddPoints(std::vector<double>* d, double from, double to, int points) {
   for (int i = 0; i < points; ++i) d->push_back(from + (to - from) * (i + 0.5) / points);
 }
 
+TEST(RowFruitDistance, TakesTheNearestStretchOfFruitHoldingEnoughOfIt) {
+  // (distance, pixels) of kept clusters, spread over 25 cm bands.
+  const auto stretch = [](std::vector<std::pair<double, double>>* d, double from, double to, double densest_at,
+                          double pixels) {
+    for (double x = from + 0.125; x < to; x += 0.25)
+      d->emplace_back(x, std::abs(x - densest_at) < 0.1 ? pixels : pixels / 4);
+  };
+  // One tree filmed: the next row (5.5-6.5 m) holds more fruit pixels than
+  // the tree (2.0-3.0 m), and its densest band more than the tree's.
+  std::vector<std::pair<double, double>> one_tree;
+  stretch(&one_tree, 2.0, 3.0, 2.125, 4000);
+  stretch(&one_tree, 5.5, 6.5, 5.625, 5000);
+  EXPECT_DOUBLE_EQ(RowFruitDistance(one_tree, 1.0, 0.01, 0.5), 2.125);
+  // The densest band alone (no aisle to split at) takes the next row.
+  EXPECT_DOUBLE_EQ(RowFruitDistance(one_tree, 0, 0.01, 0.5), 5.625);
+  // Chance pairings in front of the row holding a third of its pixels are not the row.
+  std::vector<std::pair<double, double>> chance;
+  stretch(&chance, 0.0, 1.0, 0.625, 8000);
+  stretch(&chance, 2.0, 3.0, 2.375, 24000);
+  EXPECT_DOUBLE_EQ(RowFruitDistance(chance, 1.0, 0.01, 0.5), 2.375);
+  // ... unless a third is enough.
+  EXPECT_DOUBLE_EQ(RowFruitDistance(chance, 1.0, 0.01, 0.3), 0.625);
+  EXPECT_EQ(RowFruitDistance({}, 1.0, 0.01, 0.5), 0);
+}
+
 TEST(NextRowGapCut, CutsInTheMiddleOfTheAisleBetweenTheRowAndTheNextRow) {
   std::vector<double> d;
   AddPoints(&d, 1.6, 3.35, 1750);  // the filmed row, row distance 2.1

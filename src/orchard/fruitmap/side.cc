@@ -51,22 +51,39 @@ void PathAxes(const std::vector<CameraView>& views, const Plane& ground, Eigen::
 // read the fruit's distances from the camera path in these.
 constexpr double kDistanceBand = 0.25;
 
-// The filmed row's fruit: the 25 cm band of cluster distances holding the
-// most fruit pixels (each cluster weighted by the pixels of its largest view).
-// Counting clusters instead would pick the next row when the filmed stretch
-// is short and the next row fills the frame; its apples are small in the
-// image, the filmed row's large.
-double DensestFruitDistance(const std::vector<std::pair<double, double>>& distance_pixels) {
+}  // namespace
+
+double RowFruitDistance(const std::vector<std::pair<double, double>>& distance_pixels, double gap,
+                        double sparse_fraction, double min_share) {
   std::map<int, double> bands;
   for (const auto& [d, pixels] : distance_pixels)
     if (d > 0) bands[static_cast<int>(d / kDistanceBand)] += pixels;
   if (bands.empty()) return 0;
-  const auto best = std::max_element(bands.begin(), bands.end(),
-                                     [](const auto& a, const auto& b) { return a.second < b.second; });
-  return (best->first + 0.5) * kDistanceBand;
+  double fullest = 0;
+  for (const auto& [band, pixels] : bands) fullest = std::max(fullest, pixels);
+  // Stretches of fruit: runs of bands above the sparse level, split where
+  // at least `gap` m of sparse bands lie between two of them.
+  struct Stretch {
+    double pixels = 0, densest_pixels = -1;
+    int densest = 0;
+  };
+  std::vector<Stretch> stretches;
+  int previous = 0;
+  for (const auto& [band, pixels] : bands) {
+    if (pixels <= sparse_fraction * fullest) continue;
+    if (stretches.empty() || (gap > 0 && (band - previous - 1) * kDistanceBand >= gap - 1e-9))
+      stretches.emplace_back();
+    Stretch& s = stretches.back();
+    s.pixels += pixels;
+    if (pixels > s.densest_pixels) s.densest_pixels = pixels, s.densest = band;
+    previous = band;
+  }
+  double most = 0;
+  for (const auto& s : stretches) most = std::max(most, s.pixels);
+  for (const auto& s : stretches)
+    if (s.pixels >= min_share * most) return (s.densest + 0.5) * kDistanceBand;
+  return 0;  // not reached: the fullest stretch qualifies
 }
-
-}  // namespace
 
 std::optional<double> NextRowGapCut(const std::vector<double>& point_distances, double row_distance, double gap,
                                     double sparse_fraction) {
@@ -132,6 +149,8 @@ void ClusterOptions::Check() const {
                        "merge shared fraction must be in [0, 1], got ", merge_shared_fraction);
   ORCHARD_CHECK_OPTION(best_views >= 1, "best views must be at least 1, got ", best_views);
   ORCHARD_CHECK_OPTION(row_distance >= 0, "row distance must be >= 0, got ", row_distance);
+  ORCHARD_CHECK_OPTION(row_min_share > 0 && row_min_share <= 1, "row min share must be in (0, 1], got ",
+                       row_min_share);
   ORCHARD_CHECK_OPTION(next_row_gap >= 0, "next-row gap must be >= 0, got ", next_row_gap);
   ORCHARD_CHECK_OPTION(next_row_sparse >= 0 && next_row_sparse < 1, "next-row sparse fraction must be in [0, 1), got ",
                        next_row_sparse);
@@ -284,7 +303,9 @@ ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std
                         return a.pixels < b.pixels;
                       })->pixels);
   }
-  r.row_distance = o.row_distance > 0 ? o.row_distance : DensestFruitDistance(tree_distances);
+  r.row_distance = o.row_distance > 0
+                       ? o.row_distance
+                       : RowFruitDistance(tree_distances, o.next_row_gap, o.next_row_sparse, o.row_min_share);
   std::vector<double> point_distances;
   for (const auto& c : r.clusters)
     if (c.status == "kept")
@@ -807,9 +828,14 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   CheckAppleSize(std::move(single_apple_radii), clusters.points.apple_radius, o.reconstruction_check, &check);
   CheckFrameSpacing(r.row_distance, o.reconstruction_check, &check);
   for (size_t i = logged; i < check.warnings.size(); ++i) spdlog::warn("reconstruction: {}", check.warnings[i]);
-  s.one_side_count =
-      o.one_side_clusters ? CountFruitClusters(views, frames, ground, resolved(*o.one_side_clusters), r.points).count
-                          : r.count;
+  s.one_side_count = r.count;
+  if (o.one_side_clusters) {
+    // One row, one distance: found on the clusters above, not again on the
+    // other rules' (their densest band moved 25-75 cm on 4 of 186 sides).
+    ClusterOptions one_side = resolved(*o.one_side_clusters);
+    if (one_side.row_distance <= 0) one_side.row_distance = r.row_distance;
+    s.one_side_count = CountFruitClusters(views, frames, ground, one_side, r.points).count;
+  }
   s.clusters_s = stopwatch.Lap();
   WriteOutputs(in.out, image_paths, frames, r, o);
   s.outputs_s = stopwatch.Lap();

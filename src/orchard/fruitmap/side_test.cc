@@ -109,7 +109,7 @@ TEST(SideDenseFramesTest, FramesTwiceTooDenseAreThinnedToEveryOther) {
   fs::remove_all(dir);
   synth::SynthOptions so;
   so.seed = 5;
-  so.scene.num_trees = 2;  // one tree: the next row holds more of the fruit, and its distance is taken for the row's
+  so.scene.num_trees = 1;  // the next row holds more of the fruit pixels than the tree (RowFruitDistance)
   so.camera.sides = "front";
   so.camera.fps = 16;
   so.patch_every = 0;
