@@ -33,6 +33,9 @@ void AddSideOptions(CLI::App* cmd, SideOptions* options) {
   cmd->add_option("--ground-below-penalty", o.ground.below_penalty,
                   "Ground fit: each sparse point well below a candidate plane costs this many inliers")
       ->capture_default_str();
+  cmd->add_option("--ground-max-tilt", o.ground.max_tilt_deg,
+                  "Ground fit: largest angle (degrees) between the plane's normal and the cameras' mean up")
+      ->capture_default_str();
   cmd->add_flag("!--no-ground-refit", o.refit_ground_below_fruit,
                 "Keep a fitted ground plane that too many fruit points lie below (default: refit it below the fruit)");
   cmd->add_flag("--rescale-poses", o.rescale_given_poses, "Scale given poses by the camera height too");

@@ -76,6 +76,34 @@ TEST(GroundPlane, PrefersTheLowestSurfaceToADenserLayerAboveIt) {
   EXPECT_THROW(o.Check(), Error);
 }
 
+TEST(GroundPlane, TakesNoSurfaceTiltedMoreThanTheCamerasArePitched) {
+  // 100 level ground points (y -1..1) and 200 on a surface tilted 25 degrees
+  // about the row's axis beyond them (y 1.5..3.5, rising away from the
+  // cameras), nothing below either: the surface has more points, as on
+  // two-tree rows' backs whose COLMAP points gave a surface rising 19-20
+  // degrees away from the cameras more support than the ground.
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const double slope = std::tan(25 * M_PI / 180);
+  std::vector<Eigen::Vector3d> pts;
+  for (int i = 0; i < 100; ++i) pts.push_back({4 * u(rng), u(rng), 0.01 * u(rng)});
+  for (int i = 0; i < 200; ++i) {
+    const double y = 2.5 + u(rng);
+    pts.push_back({4 * u(rng), y, slope * (y - 1.5) + 0.01 * u(rng)});
+  }
+  std::vector<Eigen::Vector3d> centres;
+  for (int i = 0; i < 5; ++i) centres.push_back({i * 0.5, -2.5, 1.5});
+  const Eigen::Vector3d up(0, 0, 1);
+  GroundPlaneOptions o;
+  const Plane ground = FitGroundPlane(pts, centres, up, o);
+  // (The inlier distance, 2% of ~5 m, lets planes a few degrees off take
+  // the ground and a strip of the surface.)
+  EXPECT_GT(ground.normal.z(), std::cos(6 * M_PI / 180));
+  EXPECT_NEAR(ground.SignedDistance(Eigen::Vector3d::Zero()), 0, 0.05);
+  o.max_tilt_deg = 30;  // the slope is taken
+  EXPECT_NEAR(std::acos(FitGroundPlane(pts, centres, up, o).normal.z()) * 180 / M_PI, 25, 1);
+}
+
 TEST(GroundPlane, FruitKnownToBeAboveCorrectsAPlaneThroughIt) {
   // The same ground and layer as above, with inliers alone (the layer wins),
   // and a fruit wall 0.3-2.3 m high that the layer cuts: each fruit point
