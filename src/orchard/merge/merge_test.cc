@@ -195,6 +195,21 @@ TEST(RowRegistrationTest, RecoversKnownTransformsWithoutSharedFruit) {
     EXPECT_GT(r.correlation, 0.9);
     EXPECT_GT(r.overlap, 3.5);  // the camera paths: 0..3.75 m
   }
+  // Row distances that leave no room for the canopy between the sides: the
+  // canopy found is not the row's.
+  {
+    SideCloud front, back;
+    RowSides(RowScene(), BackToFrontTransform(0, 0, 5.0), &front, &back);
+    front.row_distance = back.row_distance = 0.9;
+    try {
+      RegisterSidesOnRow(front, back, RowRegistrationOptions());
+      FAIL() << "placed the sides farther apart than the row allows";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("not its own row's"), std::string::npos) << e.what();
+    }
+    front.row_distance = back.row_distance = 2.0;  // 4.94 m within 2.0 + 2.0 + 3 m
+    EXPECT_NO_THROW(RegisterSidesOnRow(front, back, RowRegistrationOptions()));
+  }
   // A path not quite parallel (0.5 deg): the half turn is kept, so the
   // heading is off by that much and the offsets stay close.
   SideCloud front, back;

@@ -334,6 +334,15 @@ Registration RegisterSidesOnRow(const SideCloud& front, const SideCloud& back, c
     for (const auto& p : canopy_b) yb.push_back(p.y());
     across = Quantile(yf, o.centre_quantile) + Quantile(yb, o.centre_quantile);
     assumed = true;
+    // The centre plane lies at most the thickest canopy behind the two
+    // sides' fruit: farther, the canopy found is the next row's (one tree
+    // filmed: 12.4 m across for row distances of 2.1 m; 4.98-5.10 m on 31
+    // rows of two and four trees, at most 0.85 m beyond the row distances).
+    if (front.row_distance > 0 && back.row_distance > 0 &&
+        across > front.row_distance + back.row_distance + o.max_thickness)
+      Fail("the two sides' cameras would stand ", across, " m apart, more than their distances to the row's fruit (",
+           front.row_distance, " + ", back.row_distance, " m) plus ", o.max_thickness,
+           " m: the canopy each side sees is not its own row's (too short a stretch filmed?)");
   }
   Registration r = EvaluateAlignment(front, back, BackToFrontTransform(heading_deg, along, across), ro);
   // The two sides see opposite faces of the canopy: the back's canopy points
