@@ -15,7 +15,7 @@ void AddSideCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "side", "Count one side of a row in 3D: side.json, clusters.csv, fruit.ply, annotated/ frames");
   struct Args {
-    std::string in, out, poses, masks, ground;
+    std::string in, out, poses, masks, ground, truth;
     FruitArgs fruit;
     SideOptions options;
   };
@@ -26,6 +26,9 @@ void AddSideCommand(CLI::App& app) {
   cmd->add_option("--ground-plane", a->ground,
                   "Ground plane nx,ny,nz,d or a json file with ground_plane {normal, d} (default: fit to the sparse points)");
   cmd->add_option("--masks", a->masks, "Instance masks (16-bit, one id per apple) named like the frames");
+  cmd->add_option("--truth", a->truth,
+                  "The generator's folder of this side (S/front or S/back): score the clusters against its apples "
+                  "(found, missed, counted twice; side.json \"truth\")");
   AddFruitOptions(cmd, &a->fruit);
   AddSideOptions(cmd, &a->options);
   cmd->callback([a]() {
@@ -33,6 +36,7 @@ void AddSideCommand(CLI::App& app) {
     in.input = a->in;
     in.out = a->out;
     in.poses = a->poses;
+    in.truth = a->truth;
     if (!a->ground.empty()) in.ground = ParseGroundPlane(a->ground);
     FruitTools tools;
     SetUpFruit(a->fruit, a->masks, &tools, &in);

@@ -74,6 +74,12 @@ void AddYieldCommand(CLI::App& app) {
     FruitTools tools;
     SetUpFruit(a->fruit, a->masks_front, &tools, &in.front);
     SetUpFruit(a->fruit, a->masks_back, &tools, &in.back);
+    // The generator's row: its sides' folders hold the masks that score each
+    // side's clusters (side.json "truth").
+    if (!in.truth.empty())
+      for (auto [side, inputs] : {std::pair<const char*, SideInputs*>{"front", &in.front}, {"back", &in.back}})
+        if (const fs::path dir = fs::path(in.truth).parent_path() / side; fs::is_directory(dir / "masks"))
+          inputs->truth = dir;
     const YieldSummary y = RunYield(in, a->options);
     std::printf("row: %d apples (front %d, back %d, seen from both sides %.1f; unmerged sum %d) -> %s/yield.json\n",
                 y.total, y.front, y.back, y.shared, y.sum_of_sides, a->out.c_str());

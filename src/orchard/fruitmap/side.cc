@@ -18,6 +18,7 @@
 #include "orchard/core/file_io.h"
 #include "orchard/core/frame_source.h"
 #include "orchard/core/stopwatch.h"
+#include "orchard/fruitmap/truth_score.h"
 #include "orchard/sfm/colmap_binary.h"
 
 namespace orchard {
@@ -642,12 +643,49 @@ ColmapModel ReconstructSide(const fs::path& image_dir, const SideInputs& in, con
 
 }  // namespace
 
+namespace {
+
+// The side's kept clusters scored against the generator's truth in `dir`
+// (S/front or S/back), for side.json; logged in one line.
+// The truth folder without a trailing separator ("S/front/" -> "S/front").
+fs::path TruthFolder(fs::path dir) { return dir.filename().empty() ? dir.parent_path() : dir; }
+
+// The apples `dir` (a side's folder of the generator) has visible; fails with
+// a message when it is not such a folder.
+std::set<int> TruthVisibleApples(const fs::path& dir) {
+  if (!fs::is_directory(dir / "masks")) Fail("truth: ", dir.string(), " has no masks/ (give the generator's S/front or S/back)");
+  return ReadVisibleApples(dir.parent_path() / "apples.csv", dir.filename().string());
+}
+
+Json ScoreAgainstTruth(const fs::path& truth, const std::vector<CameraView>& views, const ClusterResult& result) {
+  const fs::path dir = TruthFolder(truth);
+  const std::set<int> visible = TruthVisibleApples(dir);
+  MaskFinder finder(dir / "masks");
+  std::vector<cv::Mat> masks;
+  for (const auto& v : views) {
+    const fs::path path = finder.Find(fs::path(v.name).stem().string());
+    if (!fs::exists(path)) Fail("truth: no mask for frame ", v.name, " in ", (dir / "masks").string());
+    masks.push_back(ReadImage(path, cv::IMREAD_UNCHANGED));
+  }
+  const SideTruthScore t = ScoreSideAgainstTruth(views, masks, visible, result);
+  spdlog::info("truth: {} counted for {} visible ({:+.1f}%): {} found, {} missed; {} counted twice, {} above a "
+               "cluster's apples, {} on no visible apple",
+               t.count, t.visible, t.visible ? 100.0 * (t.count - t.visible) / t.visible : 0.0, t.found, t.missed,
+               t.duplicates, t.over_counted, t.not_visible);
+  return Json{{"apples", (dir.parent_path() / "apples.csv").string()}, {"visible", t.visible}, {"count", t.count},
+              {"found", t.found}, {"missed", t.missed}, {"duplicates", t.duplicates},
+              {"over_counted", t.over_counted}, {"not_visible", t.not_visible}};
+}
+
+}  // namespace
+
 SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   o.Check();
   if (in.out.empty()) Fail("no output folder");
   if (!fs::exists(in.input)) Fail("input ", in.input.string(), " does not exist");
   if (!in.detector && in.masks.empty()) Fail("give a detector or a folder of instance masks");
   if (!in.detector && !fs::is_directory(in.masks)) Fail("masks folder ", in.masks.string(), " does not exist");
+  if (!in.truth.empty()) TruthVisibleApples(TruthFolder(in.truth));  // a wrong folder fails now, not after the count
   fs::create_directories(in.out);
   Stopwatch stopwatch;
   SideSummary s;
@@ -829,13 +867,17 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   CheckFrameSpacing(r.row_distance, o.reconstruction_check, &check);
   for (size_t i = logged; i < check.warnings.size(); ++i) spdlog::warn("reconstruction: {}", check.warnings[i]);
   s.one_side_count = r.count;
+  std::optional<ClusterResult> one_side_result;
   if (o.one_side_clusters) {
     // One row, one distance: found on the clusters above, not again on the
     // other rules' (their densest band moved 25-75 cm on 4 of 186 sides).
     ClusterOptions one_side = resolved(*o.one_side_clusters);
     if (one_side.row_distance <= 0) one_side.row_distance = r.row_distance;
-    s.one_side_count = CountFruitClusters(views, frames, ground, one_side, r.points).count;
+    one_side_result = CountFruitClusters(views, frames, ground, one_side, r.points);
+    s.one_side_count = one_side_result->count;
   }
+  Json truth_json;
+  if (!in.truth.empty()) truth_json = ScoreAgainstTruth(in.truth, views, one_side_result ? *one_side_result : r);
   s.clusters_s = stopwatch.Lap();
   WriteOutputs(in.out, image_paths, frames, r, o);
   s.outputs_s = stopwatch.Lap();
@@ -867,7 +909,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   for (const auto& w : check.warnings) warnings.push_back("reconstruction: " + w);
   if (s.clusters_kept == 0) warnings.push_back("no fruit cluster kept: the count is not meaningful");
   for (const auto& w : warnings) s.warnings.push_back(w.get<std::string>());
-  const Json j = {
+  Json j = {
       {"count", s.count},
       {"one_side_count", s.one_side_count},
       {"single_frame_sum", s.single_frame_sum},
@@ -904,6 +946,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
       {"warnings", warnings},
       {"timings_s", {{"poses", s.poses_s}, {"fruit", s.fruit_s}, {"clusters", s.clusters_s}, {"outputs", s.outputs_s}}},
   };
+  if (!truth_json.is_null()) j["truth"] = truth_json;
   WriteTextFileAtomic(in.out / "side.json", j.dump(2) + "\n");
   spdlog::info("{} apples in {} clusters ({} removed); single-frame sum {}", s.count, s.clusters_kept,
                s.clusters_removed, s.single_frame_sum);

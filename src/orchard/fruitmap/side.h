@@ -262,6 +262,10 @@ struct SideInputs {
   // Apples per blob: a counter, or one per blob when null.
   Counter* counter = nullptr;
   std::string counter_name = "blob";
+  // The generator's folder of this side (S/front or S/back: masks/ inside,
+  // apples.csv one up): when set, the kept clusters are scored against its
+  // apples (ScoreSideAgainstTruth; side.json "truth"). Empty: not scored.
+  fs::path truth;
 };
 
 // options.best_views_by with kAuto decided for these inputs: kCount for

@@ -73,7 +73,19 @@ TEST_F(SideTest, CountsTheVisibleApplesOnceFromTruePosesAndMasks) {
   EXPECT_NEAR(check.at("frame_spacing").get<double>(), 0.057, 0.012);
   // A rerun resumes from the cached detections and gives the same count.
   EXPECT_TRUE(fs::exists(*dir_ / "out/detections/frame_0000.json"));
-  EXPECT_EQ(RunSide(Inputs("out"), o).count, s.count);
+  // ... and, given the generator's side folder, says where the count comes from.
+  SideInputs scored = Inputs("out");
+  scored.truth = *dir_ / "synth/front";
+  EXPECT_EQ(RunSide(scored, o).count, s.count);
+  const auto t = nlohmann::json::parse(ReadTextFile(*dir_ / "out/side.json")).at("truth");
+  EXPECT_EQ(t.at("visible").get<int>(), visible);
+  EXPECT_EQ(t.at("count").get<int>(), s.count);
+  EXPECT_EQ(t.at("found").get<int>() + t.at("missed").get<int>(), visible);
+  EXPECT_GT(t.at("found").get<int>(), 0.8 * visible);
+  EXPECT_EQ(s.count - visible, t.at("duplicates").get<int>() + t.at("over_counted").get<int>() +
+                                   t.at("not_visible").get<int>() - t.at("missed").get<int>());
+  scored.truth = *dir_ / "synth/nowhere";  // not a side of the generator's row
+  EXPECT_THROW(RunSide(scored, o), Error);
 }
 
 TEST_F(SideTest, WarnsWhenApplesShowTheScaleIsWrong) {

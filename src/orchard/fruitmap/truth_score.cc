@@ -1,0 +1,135 @@
+#include "orchard/fruitmap/truth_score.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <sstream>
+#include <tuple>
+
+#include "orchard/core/error.h"
+#include "orchard/core/file_io.h"
+
+namespace orchard {
+
+void TruthScoreOptions::Check() const {
+  ORCHARD_CHECK_OPTION(window_px >= 0, "truth window must be >= 0 pixels, got ", window_px);
+  ORCHARD_CHECK_OPTION(min_votes >= 1, "truth min votes must be at least 1, got ", min_votes);
+}
+
+namespace {
+
+// The apple id (0-based) most common in the window around `pixel`; -1 when
+// the window holds no apple.
+int AppleAt(const cv::Mat& mask, const Eigen::Vector2d& pixel, int half) {
+  // Views project in COLMAP's convention: pixel (i, j) spans [i, i + 1).
+  const int u = static_cast<int>(std::floor(pixel.x())), v = static_cast<int>(std::floor(pixel.y()));
+  std::map<int, int> seen;
+  for (int y = std::max(0, v - half); y <= std::min(mask.rows - 1, v + half); ++y)
+    for (int x = std::max(0, u - half); x <= std::min(mask.cols - 1, u + half); ++x)
+      if (const int id = mask.at<uint16_t>(y, x); id > 0) ++seen[id - 1];
+  int best = -1, best_n = 0;
+  for (const auto& [id, n] : seen)
+    if (n > best_n) best = id, best_n = n;
+  return best;
+}
+
+}  // namespace
+
+SideTruthScore ScoreSideAgainstTruth(const std::vector<CameraView>& views, const std::vector<cv::Mat>& truth_masks,
+                                     const std::set<int>& visible, const ClusterResult& result,
+                                     const TruthScoreOptions& o) {
+  o.Check();
+  if (views.size() != truth_masks.size())
+    Fail("truth score: ", views.size(), " views but ", truth_masks.size(), " truth masks");
+  for (size_t i = 0; i < views.size(); ++i)
+    if (truth_masks[i].type() != CV_16UC1 || truth_masks[i].cols != views[i].width ||
+        truth_masks[i].rows != views[i].height)
+      Fail("truth mask of ", views[i].name, " must be 16-bit, one channel, ", views[i].width, "x", views[i].height);
+  SideTruthScore s;
+  s.visible = static_cast<int>(visible.size());
+  std::vector<int> kept;
+  std::vector<std::map<int, int>> votes;  // per kept cluster: apple id -> votes
+  for (size_t c = 0; c < result.clusters.size(); ++c) {
+    const FruitCluster& cluster = result.clusters[c];
+    if (cluster.status != "kept") continue;
+    kept.push_back(static_cast<int>(c));
+    s.count += cluster.count;
+    std::map<int, int>& v = votes.emplace_back();
+    for (int p : cluster.points)
+      for (size_t f = 0; f < views.size(); ++f) {
+        Eigen::Vector2d pixel;
+        if (views[f].Depth(result.points[p].xyz) <= 0 || !views[f].Project(result.points[p].xyz, &pixel)) continue;
+        if (const int id = AppleAt(truth_masks[f], pixel, o.window_px); id >= 0) ++v[id];
+      }
+  }
+  // Pairs by votes, most first; ties by cluster then apple, so the result
+  // does not depend on the map's order.
+  std::vector<std::tuple<int, int, int>> pairs;  // (-votes, kept index, apple)
+  for (size_t k = 0; k < kept.size(); ++k)
+    for (const auto& [apple, n] : votes[k])
+      if (n >= o.min_votes && visible.count(apple)) pairs.emplace_back(-n, static_cast<int>(k), apple);
+  std::sort(pairs.begin(), pairs.end());
+  std::vector<int> credited(kept.size(), 0);
+  std::set<int> found;
+  for (const auto& [neg_votes, k, apple] : pairs) {
+    if (credited[k] >= result.clusters[kept[k]].count || found.count(apple)) continue;
+    found.insert(apple);
+    ++credited[k];
+  }
+  s.found = static_cast<int>(found.size());
+  s.missed = s.visible - s.found;
+  for (size_t k = 0; k < kept.size(); ++k) {
+    const int left = result.clusters[kept[k]].count - credited[k];
+    if (left <= 0) continue;
+    if (credited[k] > 0) {
+      s.over_counted += left;
+      continue;
+    }
+    // Credited with nothing: on a visible apple (which another cluster holds) or not.
+    int top = -1, top_n = 0;
+    for (const auto& [apple, n] : votes[k])
+      if (n > top_n) top = apple, top_n = n;
+    (top >= 0 && visible.count(top) ? s.duplicates : s.not_visible) += left;
+  }
+  return s;
+}
+
+std::set<int> ReadVisibleApples(const fs::path& apples_csv, const std::string& side) {
+  if (side != "front" && side != "back") Fail("truth side must be front or back, got '", side, "'");
+  std::istringstream in(ReadTextFile(apples_csv));
+  std::string line;
+  std::getline(in, line);
+  const auto split = [](const std::string& text) {
+    std::vector<std::string> fields;
+    std::stringstream ls(text);
+    std::string item;
+    while (std::getline(ls, item, ',')) fields.push_back(item);
+    return fields;
+  };
+  const std::vector<std::string> header = split(line);
+  const auto column = [&](const std::string& name) {
+    const auto it = std::find(header.begin(), header.end(), name);
+    if (it == header.end()) Fail(apples_csv.string(), " has no column '", name, "' (not the generator's apples.csv?)");
+    return static_cast<size_t>(it - header.begin());
+  };
+  const size_t id_col = column("id"), row_col = column("row"), ground_col = column("on_ground"),
+               visible_col = column("visible_" + side);
+  std::set<int> visible;
+  int line_no = 1;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (line.empty()) continue;
+    const std::vector<std::string> f = split(line);
+    if (f.size() != header.size()) Fail(apples_csv.string(), " line ", line_no, ": ", f.size(), " fields, header has ", header.size());
+    if (f[row_col] == "0" && f[ground_col] == "0" && f[visible_col] == "1") {
+      try {
+        visible.insert(std::stoi(f[id_col]));
+      } catch (const std::exception&) {
+        Fail(apples_csv.string(), " line ", line_no, ": id '", f[id_col], "' is not a number");
+      }
+    }
+  }
+  return visible;
+}
+
+}  // namespace orchard

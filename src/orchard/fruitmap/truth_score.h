@@ -1,0 +1,59 @@
+// Where a side's count comes from, against the synthetic generator's truth:
+// which visible apples the kept clusters found, which they missed, and what
+// the rest of the count is (an apple counted twice, a cluster counted above
+// the apples it holds, fruit that is not a visible apple of the filmed row).
+// A count can be right while missing and duplicating many apples that cancel;
+// this shows both terms (docs/side.md, "Where a side's count comes from").
+#pragma once
+
+#include <filesystem>
+#include <set>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "orchard/fruitmap/side.h"
+#include "orchard/sfm/camera_view.h"
+
+namespace orchard {
+
+namespace fs = std::filesystem;
+
+struct TruthScoreOptions {
+  // A fruit point projected into a frame votes for the apple id that is most
+  // common in this square (half-width, pixels) of the frame's truth mask: the
+  // point of a partly hidden apple lands a pixel or two off its visible piece.
+  int window_px = 2;
+  // A cluster is credited with an apple only when its points vote for it at
+  // least this often (one chance vote is no evidence).
+  int min_votes = 2;
+  void Check() const;
+};
+
+struct SideTruthScore {
+  int visible = 0;       // visible apples of the filmed row, off the ground
+  int count = 0;         // the kept clusters' counts summed
+  int found = 0;         // visible apples credited to a kept cluster
+  int missed = 0;        // visible - found
+  int duplicates = 0;    // counts of kept clusters credited with no apple, on an apple another cluster holds
+  int over_counted = 0;  // counts above the apples credited, of clusters credited with some
+  int not_visible = 0;   // counts of clusters on no visible apple (next row, fallen, chance pairings)
+  // count - visible = duplicates + over_counted + not_visible - missed.
+};
+
+// Credits each kept cluster of `result` with up to its count of visible
+// apples: every fruit point of the cluster is projected into every view and
+// votes for the truth mask's apple there; (cluster, apple) pairs are taken in
+// order of votes, each apple once, each cluster up to its count. `views[i]`
+// and `truth_masks[i]` are the same frame (16-bit, apple id + 1, 0 elsewhere:
+// the generator's masks); `visible` holds the 0-based ids to find.
+SideTruthScore ScoreSideAgainstTruth(const std::vector<CameraView>& views, const std::vector<cv::Mat>& truth_masks,
+                                     const std::set<int>& visible, const ClusterResult& result,
+                                     const TruthScoreOptions& options = {});
+
+// The 0-based ids of the apples that `side` ("front" or "back") counts as
+// visible in the generator's apples.csv: visible_<side> = 1, the filmed row
+// (row 0), not on the ground. Fails with a message on a file of another layout.
+std::set<int> ReadVisibleApples(const fs::path& apples_csv, const std::string& side);
+
+}  // namespace orchard
