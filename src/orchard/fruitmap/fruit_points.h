@@ -113,6 +113,13 @@ class BlobCentres {
   std::vector<std::vector<int>> grid_;  // blob indices per cell
 };
 
+// Projects X into `view`: true when it falls in the image or at most an
+// apple's radius (options.apple_radius at X's depth) beyond its edge, where
+// the frame cuts an apple whose centre lies just outside it (the top of the
+// canopy is above the frames of the synthetic rows); `inside` says which.
+bool ProjectNearFrame(const CameraView& view, const Eigen::Vector3d& X, const FruitPointOptions& options,
+                      Eigen::Vector2d* pixel, bool* inside);
+
 // BlobCentres(frame).Near(view, X, options), for a single lookup.
 int BlobNearPoint(const CameraView& view, const FruitFrame& frame, const Eigen::Vector3d& X,
                   const FruitPointOptions& options);

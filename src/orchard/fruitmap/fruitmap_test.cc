@@ -468,6 +468,35 @@ TEST(FitAppleCentre, FindsTheCentreOfAPartlyHiddenAppleAndKeepsTheCentroidOtherw
   EXPECT_EQ(frame.apple_centres[2], speck.centroid);
 }
 
+TEST(FitAppleCentre, AnAppleTheFrameCutsIsCentredOnItsOwnOutline) {
+  // The frame's top edge cuts an apple whose centre lies 6 px above the
+  // frame: the blob's straight top edge is the frame's, not the apple's.
+  const int radius = 12;
+  cv::Mat1i labels = cv::Mat1i::zeros(100, 120);
+  cv::circle(labels, cv::Point(50, -6), radius, 1, -1);
+  const Blob cut = BlobOf(labels, 1);
+  ASSERT_GT(cut.pixels, 50);
+  ASSERT_GT(cv::norm(cut.centroid - cv::Point2d(50, -6)), 6.0);
+  EXPECT_LT(cv::norm(FitAppleCentre(labels, cut) - cv::Point2d(50, -6)), 0.6);  // 1.1 px with the edge in the fit
+}
+
+TEST(ProjectNearFrame, TakesPointsUpToAnApplesRadiusBeyondTheFrame) {
+  const CameraView v = ViewAt(0);  // f = 500 px, 2.5 m from y = 0
+  FruitPointOptions o;
+  o.apple_radius = 0.05;  // 10 px at 2.5 m
+  Eigen::Vector2d p;
+  bool inside = false;
+  EXPECT_TRUE(ProjectNearFrame(v, Eigen::Vector3d(0, 0, 1.5), o, &p, &inside));
+  EXPECT_TRUE(inside);
+  // 6 px above the top edge: near; 20 px above: not.
+  const double top = 1.5 + 240 * 2.5 / 500;
+  EXPECT_TRUE(ProjectNearFrame(v, Eigen::Vector3d(0, 0, top + 6 * 2.5 / 500), o, &p, &inside));
+  EXPECT_FALSE(inside);
+  EXPECT_NEAR(p.y(), -6, 1e-6);
+  EXPECT_FALSE(ProjectNearFrame(v, Eigen::Vector3d(0, 0, top + 20 * 2.5 / 500), o, &p, &inside));
+  EXPECT_FALSE(ProjectNearFrame(v, Eigen::Vector3d(0, -3, 1.5), o, &p, &inside));  // behind the camera
+}
+
 TEST(CountFruitClusters, FindsAnAppleSeenOnlyThroughGapsInTheLeaves) {
   std::vector<CameraView> views;
   for (int i = 0; i < 24; ++i) views.push_back(ViewAt(-1.2 + 0.1 * i));

@@ -213,8 +213,10 @@ ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std
     const BlobCentres centres(frames[f]);
     for (size_t i = 0; i < xyz.size(); ++i) {
       Eigen::Vector2d p;
-      if (views[f].Depth(xyz[i]) < o.points.min_depth || !views[f].Project(xyz[i], &p)) continue;
-      const int under = frames[f].labels(static_cast<int>(p.y()), static_cast<int>(p.x()));
+      bool inside = false;
+      if (views[f].Depth(xyz[i]) < o.points.min_depth || !ProjectNearFrame(views[f], xyz[i], o.points, &p, &inside))
+        continue;
+      const int under = inside ? frames[f].labels(static_cast<int>(p.y()), static_cast<int>(p.x())) : 0;
       int id = under;
       if (o.vote_near_first) {
         id = centres.Near(views[f], xyz[i], o.points);
