@@ -74,7 +74,7 @@ cv::Point2d FitAppleCentre(const cv::Mat1i& labels, const Blob& blob) {
   // Where the frame cuts an apple, the blob's edge is the frame's, not the
   // apple's: a circle fitted through it is pulled off the centre, and the
   // centroid is too (apples at the frame's top edge, 2.2-2.8 m up on the
-  // synthetic rows, were a third of the visible apples missed; docs/side.md).
+  // synthetic rows, were nearly half of the apples missed; docs/side.md).
   const auto on_frame_edge = [&labels](int x, int y) {
     return x <= 0 || y <= 0 || x >= labels.cols - 1 || y >= labels.rows - 1;
   };

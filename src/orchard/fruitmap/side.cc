@@ -643,12 +643,6 @@ ColmapModel ReconstructSide(const fs::path& image_dir, const SideInputs& in, con
   return std::move(models.at(best));
 }
 
-}  // namespace
-
-namespace {
-
-// The side's kept clusters scored against the generator's truth in `dir`
-// (S/front or S/back), for side.json; logged in one line.
 // The truth folder without a trailing separator ("S/front/" -> "S/front").
 fs::path TruthFolder(fs::path dir) { return dir.filename().empty() ? dir.parent_path() : dir; }
 
@@ -659,6 +653,8 @@ std::set<int> TruthVisibleApples(const fs::path& dir) {
   return ReadVisibleApples(dir.parent_path() / "apples.csv", dir.filename().string());
 }
 
+// The side's kept clusters scored against the generator's truth in `truth`
+// (S/front or S/back), for side.json; logged in one line.
 Json ScoreAgainstTruth(const fs::path& truth, const std::vector<CameraView>& views, const ClusterResult& result) {
   const fs::path dir = TruthFolder(truth);
   const std::set<int> visible = TruthVisibleApples(dir);
