@@ -80,6 +80,17 @@ void AddSideOptions(CLI::App* cmd, SideOptions* options) {
                   "Join a cluster to a larger one when at least this fraction of its votes fall on blobs both vote "
                   "for (0 = never)")
       ->capture_default_str();
+  cmd->add_option("--duplicate-shared", o.clusters.duplicate_shared_fraction,
+                  "Join a cluster to the larger one it shares most votes with when at least this fraction of its "
+                  "votes fall on blobs both vote for and the two rarely win blobs in the same frame (0 = never)")
+      ->capture_default_str();
+  cmd->add_option("--duplicate-coviews", o.clusters.duplicate_coview_fraction,
+                  "With --duplicate-shared: join only when the partner also wins a blob in fewer than this fraction "
+                  "of the frames where the cluster wins one")
+      ->capture_default_str();
+  cmd->add_option("--duplicate-distance", o.clusters.duplicate_max_distance,
+                  "With --duplicate-shared: join only clusters whose centres lie within this distance (m)")
+      ->capture_default_str();
   cmd->add_option("--assign-near", o.clusters.assign_near, "A point off every blob votes for the blob whose centre is near")
       ->capture_default_str();
   std::map<std::string, ClusterOptions::BestViews> best_views;

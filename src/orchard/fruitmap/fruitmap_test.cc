@@ -617,6 +617,37 @@ TEST(MergeSharedComponents, JoinsADuplicateToTheClusterWhoseBlobsItShares) {
   EXPECT_EQ(MergeSharedComponents(votes, 4, 0.5), (std::vector<int>{0, 0, 2, 0}));
 }
 
+TEST(MergeDuplicateComponents, JoinsAClusterThatTakesItsPartnersBlobInOtherFrames) {
+  // Component 0: an apple seen in 6 frames (blob 1, 5 points each); in
+  // frames 4 and 5 component 1, the same apple triangulated again 20 cm
+  // off, has more points on blob 1 and wins it there. Component 2: a
+  // neighbouring apple (blob 2, 3 points a frame) whose points also land on
+  // blob 1 in frames 0-3; both it and component 0 win a blob in those frames.
+  std::vector<BlobVotes> votes(6);
+  for (int f = 0; f < 6; ++f) {
+    votes[f][1][0] = 5;
+    votes[f][2][2] = 3;
+  }
+  for (int f = 4; f < 6; ++f) votes[f][1][1] = 6;
+  for (int f = 0; f < 4; ++f) votes[f][1][2] = 2;
+  const std::vector<std::vector<int>> won = {{0, 1, 2, 3}, {4, 5}, {0, 1, 2, 3, 4, 5}};
+  const std::vector<Eigen::Vector3d> centres = {{0, 0, 0}, {0, 0.2, 0}, {0.08, 0, 0}};
+  // 1 shares all its votes with 0 and never wins a blob where 0 does: joined.
+  // 2 shares 8 of 20 (0.4) but wins a blob in 4 of its 6 frames where 0 wins one.
+  EXPECT_EQ(MergeDuplicateComponents(votes, won, centres, 0.3, 0.4, 0.5), (std::vector<int>{0, 0, 2}));
+  EXPECT_EQ(MergeDuplicateComponents(votes, won, centres, 0.3, 0.7, 0.5), (std::vector<int>{0, 0, 0}));
+  EXPECT_EQ(MergeDuplicateComponents(votes, won, centres, 0.5, 0.7, 0.5), (std::vector<int>{0, 0, 2}));  // 0.4 too few
+  EXPECT_EQ(MergeDuplicateComponents(votes, won, centres, 0.3, 0.4, 0.1), (std::vector<int>{0, 1, 2}));  // 20 cm off
+  ClusterOptions o;
+  o.duplicate_shared_fraction = 0.5;
+  EXPECT_NO_THROW(o.Check());
+  o.duplicate_coview_fraction = 0;
+  EXPECT_THROW(o.Check(), Error);
+  o.duplicate_coview_fraction = 0.4;
+  o.duplicate_max_distance = 0;
+  EXPECT_THROW(o.Check(), Error);
+}
+
 TEST(ParseGroundPlane, NumbersAndErrors) {
   const Plane p = ParseGroundPlane("0,0,2,-1");
   EXPECT_NEAR(p.normal.z(), 1, 1e-12);

@@ -115,27 +115,63 @@ std::optional<double> NextRowGapCut(const std::vector<double>& point_distances, 
   return row_distance + run_start * kDistanceBand + gap / 2;
 }
 
-std::vector<int> MergeSharedComponents(const std::vector<BlobVotes>& votes, int k, double fraction) {
-  std::vector<int> total(k, 0);
-  std::vector<std::map<int, int>> shared(k);  // component -> other -> own votes on blobs both vote for
+namespace {
+
+// Each component's point-on-blob votes in all, and its votes on blobs that
+// another component also votes for, per other component.
+void SharedVotes(const std::vector<BlobVotes>& votes, int k, std::vector<int>* total,
+                 std::vector<std::map<int, int>>* shared) {
+  total->assign(k, 0);
+  shared->assign(k, {});
   for (const auto& frame_votes : votes)
     for (const auto& [blob, by_component] : frame_votes)
       for (const auto& [a, points] : by_component) {
-        total[a] += points;
+        (*total)[a] += points;
         for (const auto& other : by_component)
-          if (other.first != a) shared[a][other.first] += points;
+          if (other.first != a) (*shared)[a][other.first] += points;
       }
-  // Each component's decision rests on the votes alone, so the order does not matter.
+}
+
+// Joins each component to the component with more votes that it shares
+// most votes with, when at least `fraction` of its votes are shared and
+// accept(component, partner) holds. Each decision rests on the votes alone,
+// so the order does not matter. Returns each component's representative.
+template <typename Accept>
+std::vector<int> JoinSharingComponents(const std::vector<BlobVotes>& votes, int k, double fraction,
+                                       const Accept& accept) {
+  std::vector<int> total;
+  std::vector<std::map<int, int>> shared;
+  SharedVotes(votes, k, &total, &shared);
   UnionFind groups(k);
   for (int a = 0; a < k; ++a) {
     int best = -1, best_shared = 0;
     for (const auto& [b, points] : shared[a])
       if (total[b] > total[a] && points > best_shared) best = b, best_shared = points;
-    if (best >= 0 && best_shared >= fraction * total[a]) groups.Join(a, best);
+    if (best >= 0 && best_shared >= fraction * total[a] && accept(a, best)) groups.Join(a, best);
   }
   std::vector<int> root(k);
   for (int c = 0; c < k; ++c) root[c] = groups.Find(c);
   return root;
+}
+
+}  // namespace
+
+std::vector<int> MergeSharedComponents(const std::vector<BlobVotes>& votes, int k, double fraction) {
+  return JoinSharingComponents(votes, k, fraction, [](int, int) { return true; });
+}
+
+std::vector<int> MergeDuplicateComponents(const std::vector<BlobVotes>& votes,
+                                          const std::vector<std::vector<int>>& won_frames,
+                                          const std::vector<Eigen::Vector3d>& centres, double fraction,
+                                          double max_coview_fraction, double max_distance) {
+  const auto rarely_seen_together = [&](int a, int partner) {
+    if (won_frames[a].empty() || (centres[a] - centres[partner]).norm() > max_distance) return false;
+    const std::set<int> partner_frames(won_frames[partner].begin(), won_frames[partner].end());
+    int coviews = 0;
+    for (int f : won_frames[a]) coviews += static_cast<int>(partner_frames.count(f));
+    return coviews < max_coview_fraction * static_cast<double>(won_frames[a].size());
+  };
+  return JoinSharingComponents(votes, static_cast<int>(won_frames.size()), fraction, rarely_seen_together);
 }
 
 void ClusterOptions::Check() const {
@@ -148,6 +184,12 @@ void ClusterOptions::Check() const {
   ORCHARD_CHECK_OPTION(min_apple_fraction >= 0, "min apple fraction must be >= 0, got ", min_apple_fraction);
   ORCHARD_CHECK_OPTION(merge_shared_fraction >= 0 && merge_shared_fraction <= 1,
                        "merge shared fraction must be in [0, 1], got ", merge_shared_fraction);
+  ORCHARD_CHECK_OPTION(duplicate_shared_fraction >= 0 && duplicate_shared_fraction <= 1,
+                       "duplicate shared fraction must be in [0, 1], got ", duplicate_shared_fraction);
+  ORCHARD_CHECK_OPTION(duplicate_coview_fraction > 0 && duplicate_coview_fraction <= 1,
+                       "duplicate co-view fraction must be in (0, 1], got ", duplicate_coview_fraction);
+  ORCHARD_CHECK_OPTION(duplicate_max_distance > 0, "duplicate max distance must be positive, got ",
+                       duplicate_max_distance);
   ORCHARD_CHECK_OPTION(best_views >= 1, "best views must be at least 1, got ", best_views);
   ORCHARD_CHECK_OPTION(row_distance >= 0, "row distance must be >= 0, got ", row_distance);
   ORCHARD_CHECK_OPTION(row_min_share > 0 && row_min_share <= 1, "row min share must be in (0, 1], got ",
@@ -227,8 +269,8 @@ ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std
       if (id > 0) ++votes[f][id][r.point_cluster[i]];
     }
   }
-  if (o.merge_shared_fraction > 0) {
-    const std::vector<int> merged = MergeSharedComponents(votes, k, o.merge_shared_fraction);
+  // Joins components (merged: each component's representative) and their votes.
+  const auto join = [&](const std::vector<int>& merged) {
     std::vector<int> renumber(k, -1);  // keep ids numbered by first point
     int merged_k = 0;
     for (int& c : r.point_cluster) {
@@ -242,46 +284,67 @@ ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std
         by_component = std::move(by_cluster);
       }
     k = merged_k;
-  }
-  r.clusters.resize(k);
-  for (int c = 0; c < k; ++c) r.clusters[c].id = c + 1;
-  for (size_t i = 0; i < xyz.size(); ++i) r.clusters[r.point_cluster[i]].points.push_back(static_cast<int>(i));
-  for (auto& c : r.clusters) {
-    c.min = c.max = xyz[c.points[0]];
-    for (int i : c.points) {
-      c.centre += xyz[i];
-      c.min = c.min.cwiseMin(xyz[i]), c.max = c.max.cwiseMax(xyz[i]);
-    }
-    c.centre /= static_cast<double>(c.points.size());
-  }
-  // Each blob of each frame goes to the cluster with most points landing on
-  // it; clusters below the minimum size do not vote.
-  const auto votes_here = [&](int cluster) {
-    return static_cast<int>(r.clusters[cluster].points.size()) >= o.min_points;
   };
-  for (int f = 0; f < n; ++f) {
-    std::map<int, size_t> view_of;  // cluster -> index in its views
-    for (const auto& [blob, by_cluster] : votes[f]) {
-      int best = -1, best_points = 0;  // the first cluster with most points (map order)
-      for (const auto& [cluster, points] : by_cluster)
-        if (votes_here(cluster) && points > best_points) best = cluster, best_points = points;
-      if (best < 0) continue;
-      for (const auto& [cluster, points] : by_cluster)
-        if (votes_here(cluster))
-          (cluster == best ? r.clusters[cluster].votes_won : r.clusters[cluster].votes_lost) += points;
-      FruitCluster& c = r.clusters[best];
-      if (!view_of.count(best)) {
-        view_of[best] = c.views.size();
-        c.views.push_back({f, 0, 0});
-        c.view_blobs.emplace_back();
+  if (o.merge_shared_fraction > 0) join(MergeSharedComponents(votes, k, o.merge_shared_fraction));
+  // Clusters from the components (again after duplicates join).
+  const auto build = [&]() {
+    r.clusters.assign(k, FruitCluster());
+    for (int c = 0; c < k; ++c) r.clusters[c].id = c + 1;
+    for (size_t i = 0; i < xyz.size(); ++i) r.clusters[r.point_cluster[i]].points.push_back(static_cast<int>(i));
+    for (auto& c : r.clusters) {
+      c.min = c.max = xyz[c.points[0]];
+      for (int i : c.points) {
+        c.centre += xyz[i];
+        c.min = c.min.cwiseMin(xyz[i]), c.max = c.max.cwiseMax(xyz[i]);
       }
-      const size_t v = view_of[best];
-      const Blob* b = frames[f].FindBlob(blob);
-      c.views[v].pixels += b->pixels;
-      c.apple_radius_seen =
-          std::max(c.apple_radius_seen, EquivalentRadius(*b) * views[f].Depth(c.centre) / views[f].fx);
-      c.views[v].count += frames[f].counts[blob - 1];
-      c.view_blobs[v].push_back(blob);
+      c.centre /= static_cast<double>(c.points.size());
+    }
+    // Each blob of each frame goes to the cluster with most points landing on
+    // it; clusters below the minimum size do not vote.
+    const auto votes_here = [&](int cluster) {
+      return static_cast<int>(r.clusters[cluster].points.size()) >= o.min_points;
+    };
+    for (int f = 0; f < n; ++f) {
+      std::map<int, size_t> view_of;  // cluster -> index in its views
+      for (const auto& [blob, by_cluster] : votes[f]) {
+        int best = -1, best_points = 0;  // the first cluster with most points (map order)
+        for (const auto& [cluster, points] : by_cluster)
+          if (votes_here(cluster) && points > best_points) best = cluster, best_points = points;
+        if (best < 0) continue;
+        for (const auto& [cluster, points] : by_cluster)
+          if (votes_here(cluster))
+            (cluster == best ? r.clusters[cluster].votes_won : r.clusters[cluster].votes_lost) += points;
+        FruitCluster& c = r.clusters[best];
+        if (!view_of.count(best)) {
+          view_of[best] = c.views.size();
+          c.views.push_back({f, 0, 0});
+          c.view_blobs.emplace_back();
+        }
+        const size_t v = view_of[best];
+        const Blob* b = frames[f].FindBlob(blob);
+        c.views[v].pixels += b->pixels;
+        c.apple_radius_seen =
+            std::max(c.apple_radius_seen, EquivalentRadius(*b) * views[f].Depth(c.centre) / views[f].fx);
+        c.views[v].count += frames[f].counts[blob - 1];
+        c.view_blobs[v].push_back(blob);
+      }
+    }
+  };
+  build();
+  if (o.duplicate_shared_fraction > 0) {
+    std::vector<std::vector<int>> won_frames(k);
+    std::vector<Eigen::Vector3d> centres(k);
+    for (int c = 0; c < k; ++c) {
+      for (const auto& v : r.clusters[c].views) won_frames[c].push_back(v.frame);
+      centres[c] = r.clusters[c].centre;
+    }
+    const std::vector<int> merged =
+        MergeDuplicateComponents(votes, won_frames, centres, o.duplicate_shared_fraction, o.duplicate_coview_fraction,
+                                 o.duplicate_max_distance);
+    for (int c = 0; c < k; ++c) r.duplicates_joined += merged[c] != c;
+    if (r.duplicates_joined > 0) {
+      join(merged);
+      build();
     }
   }
   Eigen::Vector3d mean, along, across;
@@ -940,7 +1003,8 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
       {"depth_cutoff", r.depth_cutoff},
       {"depth_cutoff_from", r.depth_cutoff_from_gap ? "gap" : "margin"},
       {"fruit_points", r.points.size()},
-      {"clusters", {{"total", r.clusters.size()}, {"kept", s.clusters_kept}, {"removed", removed}}},
+      {"clusters", {{"total", r.clusters.size()}, {"kept", s.clusters_kept}, {"removed", removed},
+                    {"duplicates_joined", r.duplicates_joined}}},
       {"warnings", warnings},
       {"timings_s", {{"poses", s.poses_s}, {"fruit", s.fruit_s}, {"clusters", s.clusters_s}, {"outputs", s.outputs_s}}},
   };

@@ -322,6 +322,7 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
       {"link_distance_m", o.side.clusters.link_distance},
       {"split_counted_blobs", o.side.split_counted_blobs},
       {"vote_near_first", o.side.clusters.vote_near_first},
+      {"duplicate_shared_fraction", o.side.clusters.duplicate_shared_fraction},
       {"best_views_by", BestViewsName(ResolvedBestViews(o.side.clusters, in.front))},
       {"sides_best_views_by", BestViewsName(ResolvedBestViews(one_side, in.front))},
       {"match_distance_m", o.registration.match_distance},
