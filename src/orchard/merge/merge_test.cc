@@ -101,6 +101,38 @@ TEST(RegistrationTest, FailsOnSidesOfDifferentRows) {
   }
 }
 
+TEST(RegistrationTest, GivenPosesSettleAnAlignmentThatIsNotDistinct) {
+  // A canopy that repeats every 1.5 m: shifted by one period, three of the
+  // four tiles still match, so the fruit alone cannot tell the alignments
+  // apart (a dense, regular canopy of U-Net blobs does the same).
+  std::vector<Eigen::Vector3d> apples;
+  for (const auto& a : Canopy(40, 0, 1.5, 21))
+    for (int tile = 0; tile < 4; ++tile) apples.push_back(a + Eigen::Vector3d(1.5 * tile, 0, 0));
+  const Eigen::Isometry3d truth = BackToFrontTransform(1.0, 0.2, 5.0);
+  SideCloud front, back;
+  Sides(apples, truth, 22, &front, &back);
+  try {
+    RegisterSides(front, back, RegistrationOptions());
+    FAIL() << "took an alignment that another matches nearly as well";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("ambiguous"), std::string::npos) << e.what();
+  }
+  // Poses given for both sides that imply the same alignment settle it...
+  const Eigen::Isometry3d given = BackToFrontTransform(1.3, 0.25, 5.05);
+  const Registration r = RegisterSides(front, back, RegistrationOptions(), &given);
+  EXPECT_TRUE(r.settled_by_given_poses);
+  EXPECT_NEAR(r.along, 0.2, 0.03);
+  EXPECT_NEAR(r.across, 5.0, 0.03);
+  EXPECT_GE(2 * r.chance_matched, r.matched);
+  // ...poses that imply another (one period off) do not.
+  const Eigen::Isometry3d off = BackToFrontTransform(1.0, 1.7, 5.0);
+  EXPECT_THROW(RegisterSides(front, back, RegistrationOptions(), &off), Error);
+  // A distinct alignment is not marked as settled by the poses.
+  SideCloud plain_front, plain_back;
+  Sides(Canopy(150, 0, 5, 1), truth, 2, &plain_front, &plain_back);
+  EXPECT_FALSE(RegisterSides(plain_front, plain_back, RegistrationOptions(), &given).settled_by_given_poses);
+}
+
 TEST(RegistrationTest, FailsWhenTheSidesCoverDifferentStretches) {
   // The back side films 3..10 m of a row whose front side covers 0..5 m.
   const std::vector<Eigen::Vector3d> apples = Canopy(220, 0, 10, 7);

@@ -153,7 +153,8 @@ Registration EvaluateAlignment(const SideCloud& front, const SideCloud& back, co
   return r;
 }
 
-Registration RegisterSides(const SideCloud& front, const SideCloud& back, const RegistrationOptions& o) {
+Registration RegisterSides(const SideCloud& front, const SideCloud& back, const RegistrationOptions& o,
+                           const Eigen::Isometry3d* given) {
   o.Check();
   for (const SideCloud* s : {&front, &back})
     if (static_cast<int>(s->clusters.size()) < o.min_matched)
@@ -231,7 +232,14 @@ Registration RegisterSides(const SideCloud& front, const SideCloud& back, const 
     Fail("the two sides share too few fruit clusters (", r.matched, " of the ", fewer,
          " on the side with fewer): they do not show the same row, or the detections are too sparse to register "
          "them (give poses in one frame with --poses-registered)");
-  if (r.matched < o.min_distinctness * std::max(chance, 1))
+  // Another alignment is the same one if within 0.5 m and 3 degrees.
+  auto same = [](const Registration& a, const Registration& b) {
+    return std::hypot(a.along - b.along, a.across - b.across) <= 0.5 && std::abs(a.heading_deg - b.heading_deg) <= 3;
+  };
+  if (r.matched < o.min_distinctness * std::max(chance, 1) && given != nullptr &&
+      same(r, EvaluateAlignment(front, back, *given, o)))
+    r.settled_by_given_poses = true;
+  if (!r.settled_by_given_poses && r.matched < o.min_distinctness * std::max(chance, 1))
     Fail("the two sides' alignment is ambiguous (", r.matched, " clusters matched at the best alignment, ", chance,
          " at another): they may not show the same row");
   const double shorter = std::min(r.front_length, r.back_length);

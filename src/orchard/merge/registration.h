@@ -68,6 +68,9 @@ struct Registration {
   double correlation = 0;         // the canopy profiles' correlation at `along`
   double chance_correlation = 0;  // their best correlation 0.5 m or more away
   bool across_assumed = false;    // across from the centre-plane assumption (no shared fruit)
+  // The best alignment was not distinct from another but agreed with the
+  // given poses, which settled it (RegisterSides with `given`).
+  bool settled_by_given_poses = false;
 };
 
 // The transform a (heading, along, across) triple stands for.
@@ -80,7 +83,12 @@ Registration EvaluateAlignment(const SideCloud& front, const SideCloud& back, co
 
 // Throws orchard::Error with the reason when the sides cannot be registered:
 // too few clusters, no consistent alignment (different rows, unrelated
-// videos), or sides that cover different stretches of the row.
-Registration RegisterSides(const SideCloud& front, const SideCloud& back, const RegistrationOptions& options);
+// videos), or sides that cover different stretches of the row. `given`: the
+// back -> front transform that poses given for both sides imply, if any. A
+// best alignment that is not distinct from another (dense clusters of a
+// regular canopy) is still taken when it agrees with it: two independent
+// cues then agree, and the poses need not be in one frame for the call.
+Registration RegisterSides(const SideCloud& front, const SideCloud& back, const RegistrationOptions& options,
+                           const Eigen::Isometry3d* given = nullptr);
 
 }  // namespace orchard

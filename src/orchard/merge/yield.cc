@@ -161,7 +161,7 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
   SideCloud back_cloud = LoadSideCloud(back.out, "back");
   RowRegistrationOptions row_options = o.row;
   row_options.camera_height = o.side.camera_height;
-  Json levelling = Json::object(), level_warnings = Json::array();
+  Json levelling = Json::object(), merge_warnings = Json::array();
   if (!o.poses_registered) {
     // Ground planes level and coincident, scales alike: the side's own
     // ground fit can take the canopy's lower edge for the ground.
@@ -181,7 +181,7 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
                               " deg): re-levelled and rescaled by " + std::to_string(l.scale) +
                               " for the merge (the side's own count used the old plane)";
         spdlog::warn("{}", w);
-        level_warnings.push_back(w);
+        merge_warnings.push_back(w);
       }
     }
   }
@@ -193,9 +193,15 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
     y.registration = EvaluateAlignment(front_cloud, back_cloud, given, o.registration);
     method = "given poses in one frame";
   } else {
+    const bool both_given = !in.front.poses.empty() && !in.back.poses.empty();
     try {
-      y.registration = RegisterSides(front_cloud, back_cloud, o.registration);
+      y.registration = RegisterSides(front_cloud, back_cloud, o.registration, both_given ? &given : nullptr);
       method = "fruit clusters seen from both sides (Hough vote + closest points)";
+      if (y.registration.settled_by_given_poses) {
+        method += "; not distinct from another alignment, taken as it agrees with the given poses";
+        spdlog::info("the fruit clusters' best alignment ({} matched) is not distinct from another ({}); taken as "
+                     "it agrees with the given poses", y.registration.matched, y.registration.chance_matched);
+      }
       if (o.row_registration) {
         // A few clusters can match by chance: the canopies must agree too.
         const double c = CanopyProfileCorrelation(front_cloud, back_cloud, y.registration.back_to_front, row_options);
@@ -208,8 +214,13 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
         }
       }
     } catch (const Error& fruit_error) {
-      if (!o.row_registration || front_cloud.sparse.empty() || back_cloud.sparse.empty())
-        fail_naming_broken_sides(fruit_error);
+      if (!o.row_registration || front_cloud.sparse.empty() || back_cloud.sparse.empty()) {
+        // Given poses carry no sparse points for the row registration.
+        if (!both_given) fail_naming_broken_sides(fruit_error);
+        fail_naming_broken_sides(Error(std::string(fruit_error.what()) +
+                                       " (if the given poses of both sides share one frame, say so with "
+                                       "--poses-registered)"));
+      }
       spdlog::info("fruit registration failed ({}); registering on the row", fruit_error.what());
       try {
         y.registration = RegisterSidesOnRow(front_cloud, back_cloud, row_options);
@@ -220,7 +231,7 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
                std::string(y.registration.across_assumed ? "across assumed (canopy centre plane)"
                                                          : "across from shared fruit clusters");
     }
-    if (!in.front.poses.empty() && !in.back.poses.empty()) {
+    if (both_given) {
       // Both sides came with poses: if they share a frame (the generator's
       // true poses, RTK-GNSS), this is the registration's error.
       const Registration g = EvaluateAlignment(front_cloud, back_cloud, given, o.registration);
@@ -277,7 +288,7 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
   Json warnings = Json::array();
   for (const SideCloud* cloud : {&front_cloud, &back_cloud})
     for (const auto& w : cloud->warnings) warnings.push_back(cloud->name + ": " + w);
-  for (const auto& w : level_warnings) warnings.push_back(w);
+  for (const auto& w : merge_warnings) warnings.push_back(w);
   if (y.shared < 0)
     warnings.push_back("the merged total exceeds the sum of the sides' own counts: the sides' counts are not "
                        "consistent with their merge");
