@@ -44,6 +44,10 @@ void AddYieldCommand(CLI::App& app) {
   cmd->add_option("--max-heading", o.registration.max_heading_deg,
                   "Largest angle between the two camera paths (degrees)")
       ->capture_default_str();
+  cmd->add_option("--max-scale-change", o.registration.max_scale_change,
+                  "The back side's scale is fitted to the front's fruit within 1 +- this (each side's scale comes from "
+                  "its own ground fit; 0: take the scales as they are)")
+      ->capture_default_str();
   cmd->add_flag("--no-row-registration{false}", o.row_registration,
                 "Register the sides from their shared fruit clusters only (no fallback to the row's ground and canopy)");
   cmd->add_flag("--no-face-check{false}", o.face_check,

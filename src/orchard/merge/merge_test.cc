@@ -76,6 +76,38 @@ TEST(RegistrationTest, RecoversKnownTransforms) {
   }
 }
 
+TEST(RegistrationTest, RecoversTheBackSidesScale) {
+  // The back side's reconstruction 6% too large (its ground fit off, as
+  // COLMAP's sparse ground can make it): its clusters lie up to 30 cm from
+  // the front's at the right alignment, beyond the 8 cm match distance.
+  const std::vector<Eigen::Vector3d> apples = Canopy(150, 0, 5, 1);
+  const Eigen::Isometry3d truth = BackToFrontTransform(1.5, 0.4, 5.0);
+  SideCloud front, back;
+  Sides(apples, truth, 2, &front, &back);
+  ScaleSideCloud(&back, 1.06);
+  int shared = 0;
+  for (const auto& a : apples) shared += a.y() > 2.4 && a.y() < 2.6;
+  const Registration r = RegisterSides(front, back, RegistrationOptions());
+  EXPECT_NEAR(r.back_scale, 1 / 1.06, 0.005);
+  EXPECT_NEAR(r.heading_deg, 1.5, 0.3);
+  EXPECT_NEAR(r.along, 0.4, 0.03);
+  EXPECT_NEAR(r.across, 5.0, 0.03);
+  EXPECT_GE(r.matched, 0.9 * shared);
+  EXPECT_LT(r.residual, 0.03);
+  // The same alignment checked on the back side rescaled by the result.
+  SideCloud rescaled = back;
+  ScaleSideCloud(&rescaled, r.back_scale);
+  EXPECT_EQ(EvaluateAlignment(front, rescaled, r.back_to_front, RegistrationOptions()).matched, r.matched);
+  // Taken at its own scale, the side matches too few clusters.
+  RegistrationOptions fixed;
+  fixed.max_scale_change = 0;
+  EXPECT_THROW(RegisterSides(front, back, fixed), Error);
+  // Right scales are left alone.
+  SideCloud right_front, right_back;
+  Sides(apples, truth, 2, &right_front, &right_back);
+  EXPECT_NEAR(RegisterSides(right_front, right_back, RegistrationOptions()).back_scale, 1.0, 0.003);
+}
+
 TEST(RegistrationTest, EvaluatesAGivenTransform) {
   const std::vector<Eigen::Vector3d> apples = Canopy(100, 0, 4, 3);
   SideCloud front, back;

@@ -21,6 +21,9 @@ void RegistrationOptions::Check() const {
   ORCHARD_CHECK_OPTION(min_matched_fraction >= 0 && min_matched_fraction <= 1,
                        "min matched fraction must be in [0, 1], got ", min_matched_fraction);
   ORCHARD_CHECK_OPTION(min_distinctness >= 1, "min distinctness must be >= 1, got ", min_distinctness);
+  ORCHARD_CHECK_OPTION(max_scale_change >= 0 && max_scale_change < 0.5, "max scale change must be in [0, 0.5), got ",
+                       max_scale_change);
+  ORCHARD_CHECK_OPTION(scale_step > 0, "scale step must be positive, got ", scale_step);
   ORCHARD_CHECK_OPTION(min_overlap >= 0 && min_overlap <= 1, "min overlap must be in [0, 1], got ", min_overlap);
   ORCHARD_CHECK_OPTION(refine_iterations >= 1, "refine iterations must be >= 1, got ", refine_iterations);
 }
@@ -36,12 +39,14 @@ namespace {
 
 struct Candidate {
   double heading_deg = 0;
+  double scale = 1;
   Eigen::Vector2d offset = Eigen::Vector2d::Zero();
   int votes = 0;
 };
 
 struct Fit {
   double heading_deg = 0;
+  double scale = 1;
   Eigen::Vector2d offset = Eigen::Vector2d::Zero();
   std::vector<std::pair<int, int>> pairs;
   double residual = 0;
@@ -72,6 +77,18 @@ std::vector<Eigen::Vector3d> Transformed(const Eigen::Isometry3d& t, const std::
   return moved;
 }
 
+std::vector<Eigen::Vector3d> Scaled(std::vector<Eigen::Vector3d> points, double scale) {
+  for (auto& p : points) p *= scale;
+  return points;
+}
+
+// RMS distance between corresponding points.
+double RmsDistance(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b) {
+  double sum = 0;
+  for (size_t i = 0; i < a.size(); ++i) sum += (a[i] - b[i]).squaredNorm();
+  return a.empty() ? 0 : std::sqrt(sum / static_cast<double>(a.size()));
+}
+
 // RMS distance between matched centres.
 double RmsDistance(const std::vector<Eigen::Vector3d>& front, const std::vector<Eigen::Vector3d>& back_in_front,
                    const std::vector<std::pair<int, int>>& pairs) {
@@ -85,10 +102,11 @@ Fit Refine(const std::vector<Eigen::Vector3d>& front, const std::vector<Eigen::V
            const RegistrationOptions& o) {
   Fit fit;
   fit.heading_deg = start.heading_deg;
+  fit.scale = start.scale;
   fit.offset = start.offset;
   for (int it = 0; it < o.refine_iterations; ++it) {
     auto pairs = MatchCentres(
-        front, Transformed(BackToFrontTransform(fit.heading_deg, fit.offset.x(), fit.offset.y()), back),
+        front, Transformed(BackToFrontTransform(fit.heading_deg, fit.offset.x(), fit.offset.y()), Scaled(back, fit.scale)),
         o.match_distance);
     if (pairs.size() < 3) {
       fit.pairs = pairs;
@@ -107,13 +125,24 @@ Fit Refine(const std::vector<Eigen::Vector3d>& front, const std::vector<Eigen::V
     double heading = std::remainder(angle - M_PI, 2 * M_PI) * 180 / M_PI;
     heading = std::clamp(heading, -o.max_heading_deg, o.max_heading_deg);
     const Eigen::Rotation2Dd rot(M_PI + heading * M_PI / 180);
-    const Eigen::Vector2d offset = mf - rot * mb;
-    const bool converged = std::abs(heading - fit.heading_deg) < 1e-4 && (offset - fit.offset).norm() < 1e-5 &&
-                           pairs == fit.pairs;
-    fit.heading_deg = heading, fit.offset = offset, fit.pairs = std::move(pairs);
+    // Least-squares scale at that rotation (2D similarity), within bounds.
+    double scale = 1;
+    if (o.max_scale_change > 0) {
+      double s_pp = 0, s_qrp = 0;
+      for (const auto& [f, b] : pairs) {
+        const Eigen::Vector2d p = back[b].head<2>() - mb, q = front[f].head<2>() - mf;
+        s_pp += p.squaredNorm(), s_qrp += q.dot(rot * p);
+      }
+      if (s_pp > 0) scale = std::clamp(s_qrp / s_pp, 1 - o.max_scale_change, 1 + o.max_scale_change);
+    }
+    const Eigen::Vector2d offset = mf - scale * (rot * mb);
+    const bool converged = std::abs(heading - fit.heading_deg) < 1e-4 && std::abs(scale - fit.scale) < 1e-6 &&
+                           (offset - fit.offset).norm() < 1e-5 && pairs == fit.pairs;
+    fit.heading_deg = heading, fit.scale = scale, fit.offset = offset, fit.pairs = std::move(pairs);
     if (converged) break;
   }
-  const auto moved = Transformed(BackToFrontTransform(fit.heading_deg, fit.offset.x(), fit.offset.y()), back);
+  const auto moved =
+      Transformed(BackToFrontTransform(fit.heading_deg, fit.offset.x(), fit.offset.y()), Scaled(back, fit.scale));
   fit.pairs = MatchCentres(front, moved, o.match_distance);
   fit.residual = RmsDistance(front, moved, fit.pairs);
   return fit;
@@ -163,40 +192,46 @@ Registration RegisterSides(const SideCloud& front, const SideCloud& back, const 
   const std::vector<Eigen::Vector3d> fc = Centres(front), bc = Centres(back);
 
   // Hough vote: every pair of clusters at a similar height proposes the
-  // offset that would put them on top of each other, for each heading.
-  std::vector<Candidate> peaks;  // the best cell of each heading and its neighbours
+  // offset that would put them on top of each other, for each heading and
+  // scale of the back side.
+  std::vector<Candidate> peaks;  // the best cells of each heading (over the scales)
   const int steps = static_cast<int>(std::floor(o.max_heading_deg / o.heading_step_deg + 1e-9));
+  const int scale_steps = static_cast<int>(std::floor(o.max_scale_change / o.scale_step + 1e-9));
+  auto key = [](long long ix, long long iy) {
+    return static_cast<long long>((static_cast<unsigned long long>(ix) << 32) | static_cast<std::uint32_t>(iy));
+  };
   for (int h = -steps; h <= steps; ++h) {
     const double heading = h * o.heading_step_deg;
     const Eigen::Rotation2Dd rot(M_PI + heading * M_PI / 180);
-    std::unordered_map<long long, int> votes;
-    auto key = [](long long ix, long long iy) {
-      return static_cast<long long>((static_cast<unsigned long long>(ix) << 32) | static_cast<std::uint32_t>(iy));
-    };
-    for (const auto& b : bc) {
-      const Eigen::Vector2d rb = rot * b.head<2>();
-      for (const auto& f : fc) {
-        if (std::abs(f.z() - b.z()) > o.match_distance) continue;
-        const Eigen::Vector2d t = f.head<2>() - rb;
-        if (t.y() < o.min_path_distance || t.y() > o.max_path_distance) continue;
-        ++votes[key(static_cast<long long>(std::floor(t.x() / o.cell)), static_cast<long long>(std::floor(t.y() / o.cell)))];
+    std::vector<Candidate> cells;
+    for (int si = -scale_steps; si <= scale_steps; ++si) {
+      const double scale = 1 + si * o.scale_step;
+      std::unordered_map<long long, int> votes;
+      for (const auto& b : bc) {
+        const Eigen::Vector2d rb = scale * (rot * b.head<2>());
+        for (const auto& f : fc) {
+          if (std::abs(f.z() - scale * b.z()) > o.match_distance) continue;
+          const Eigen::Vector2d t = f.head<2>() - rb;
+          if (t.y() < o.min_path_distance || t.y() > o.max_path_distance) continue;
+          ++votes[key(static_cast<long long>(std::floor(t.x() / o.cell)),
+                      static_cast<long long>(std::floor(t.y() / o.cell)))];
+        }
+      }
+      // Score of a cell: votes in it and its 8 neighbours (a match straddles cells).
+      for (const auto& [k, v] : votes) {
+        (void)v;
+        const long long ix = k >> 32, iy = static_cast<std::int32_t>(static_cast<std::uint32_t>(k & 0xffffffffLL));
+        int sum = 0;
+        for (int dx = -1; dx <= 1; ++dx)
+          for (int dy = -1; dy <= 1; ++dy) {
+            const auto it = votes.find(key(ix + dx, iy + dy));
+            if (it != votes.end()) sum += it->second;
+          }
+        cells.push_back({heading, scale, Eigen::Vector2d((ix + 0.5) * o.cell, (iy + 0.5) * o.cell), sum});
       }
     }
-    // Score of a cell: votes in it and its 8 neighbours (a match straddles cells).
-    std::vector<Candidate> cells;
-    for (const auto& [k, v] : votes) {
-      (void)v;
-      const long long ix = k >> 32, iy = static_cast<std::int32_t>(static_cast<std::uint32_t>(k & 0xffffffffLL));
-      int sum = 0;
-      for (int dx = -1; dx <= 1; ++dx)
-        for (int dy = -1; dy <= 1; ++dy) {
-          const auto it = votes.find(key(ix + dx, iy + dy));
-          if (it != votes.end()) sum += it->second;
-        }
-      cells.push_back({heading, Eigen::Vector2d((ix + 0.5) * o.cell, (iy + 0.5) * o.cell), sum});
-    }
     std::sort(cells.begin(), cells.end(), [](const Candidate& a, const Candidate& b) { return a.votes > b.votes; });
-    // Keep a few well-separated peaks per heading.
+    // Keep a few well-separated peaks per heading, whatever their scale.
     std::vector<Candidate> kept;
     for (const auto& c : cells) {
       bool near = false;
@@ -207,7 +242,23 @@ Registration RegisterSides(const SideCloud& front, const SideCloud& back, const 
     peaks.insert(peaks.end(), kept.begin(), kept.end());
   }
   std::sort(peaks.begin(), peaks.end(), [](const Candidate& a, const Candidate& b) { return a.votes > b.votes; });
-  if (peaks.size() > 24) peaks.resize(24);
+  // The 24 best peaks to refine, at most 4 of them at one place (where they
+  // put the back side's centre, within 0.5 m): neighbouring headings and
+  // scales all peak at the true alignment, and the best alignment elsewhere
+  // must be refined too for the distinctness check.
+  Eigen::Vector2d back_centre = Eigen::Vector2d::Zero();
+  for (const auto& b : bc) back_centre += b.head<2>() / static_cast<double>(bc.size());
+  std::vector<Candidate> selected;
+  std::vector<Eigen::Vector2d> selected_at;
+  for (const auto& p : peaks) {
+    const Eigen::Vector2d at = p.scale * (Eigen::Rotation2Dd(M_PI + p.heading_deg * M_PI / 180) * back_centre) + p.offset;
+    int near = 0;
+    for (const auto& q : selected_at) near += (q - at).norm() < 0.5;
+    if (near >= 4) continue;
+    selected.push_back(p), selected_at.push_back(at);
+    if (selected.size() >= 24) break;
+  }
+  peaks.swap(selected);
 
   std::vector<Fit> fits;
   for (const auto& p : peaks) fits.push_back(Refine(fc, bc, p, o));
@@ -217,12 +268,22 @@ Registration RegisterSides(const SideCloud& front, const SideCloud& back, const 
   if (fits.empty())
     Fail("no pair of fruit clusters from the two sides could be the same fruit: the sides do not show the same row");
   const Fit best = *std::min_element(fits.begin(), fits.end(), better);
+  // Another alignment moves the back side's clusters by more than 0.5 m
+  // (RMS) from where the best puts them: fits at neighbouring headings and
+  // scales that agree about the middle of the row are the same alignment.
+  auto placed = [&](const Fit& f) {
+    return Transformed(BackToFrontTransform(f.heading_deg, f.offset.x(), f.offset.y()), Scaled(bc, f.scale));
+  };
+  const std::vector<Eigen::Vector3d> best_placed = placed(best);
   int chance = 0;
   for (const auto& f : fits)
-    if ((f.offset - best.offset).norm() > 0.5 || std::abs(f.heading_deg - best.heading_deg) > 3)
-      chance = std::max(chance, static_cast<int>(f.pairs.size()));
+    if (RmsDistance(best_placed, placed(f)) > 0.5) chance = std::max(chance, static_cast<int>(f.pairs.size()));
 
-  Registration r = EvaluateAlignment(front, back, BackToFrontTransform(best.heading_deg, best.offset.x(), best.offset.y()), o);
+  SideCloud scaled_back = back;
+  ScaleSideCloud(&scaled_back, best.scale);
+  Registration r =
+      EvaluateAlignment(front, scaled_back, BackToFrontTransform(best.heading_deg, best.offset.x(), best.offset.y()), o);
+  r.back_scale = best.scale;
   r.chance_matched = chance;
   if (r.matched < o.min_matched)
     Fail("the two sides share no consistent fruit clusters (the best alignment matches ", r.matched, ", need ",

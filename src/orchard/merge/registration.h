@@ -38,9 +38,18 @@ struct RegistrationOptions {
   int min_matched = 5;
   double min_matched_fraction = 0.12;
   // The best alignment must match this many times as many clusters as the
-  // best alignment elsewhere (more than 0.5 m or 3 degrees away): otherwise
-  // the match is chance (two unrelated rows also share a few coincidences).
+  // best alignment elsewhere (one that moves the back side's clusters by more
+  // than 0.5 m RMS): otherwise the match is chance (two unrelated rows also
+  // share a few coincidences).
   double min_distinctness = 2;
+  // The back side's scale relative to the front's is searched within
+  // 1 +- this, in steps of scale_step. Each side's scale comes from its own
+  // camera height over its own ground fit, and COLMAP's sparse ground can put
+  // one side 5-12% off (seed 350's back: a path of 5.59 m for 5.0, the
+  // front's 5.04), which leaves too few fruit clusters within
+  // match_distance at any single scale. 0: the scales are taken as they are.
+  double max_scale_change = 0.1;
+  double scale_step = 0.02;
   // The sides must overlap along the row by this fraction of the shorter one.
   double min_overlap = 0.5;
   // Refinement rounds (closest points, then a rigid fit).
@@ -55,6 +64,9 @@ struct Registration {
   double heading_deg = 0;
   double along = 0;   // offset along the row (m)
   double across = 0;  // distance between the camera paths (m)
+  // The back side's scale relative to the front's (RegisterSides): the
+  // transform applies to the back cloud scaled by this about its origin.
+  double back_scale = 1;
   int matched = 0;         // clusters matched one to one
   double residual = 0;     // RMS distance between matched centres (m)
   int chance_matched = 0;  // best match count of any other alignment
@@ -81,6 +93,9 @@ Eigen::Isometry3d BackToFrontTransform(double heading_deg, double along, double 
 Registration EvaluateAlignment(const SideCloud& front, const SideCloud& back, const Eigen::Isometry3d& back_to_front,
                                const RegistrationOptions& options);
 
+// Also solves the back side's scale relative to the front's (back_scale,
+// within options.max_scale_change): the result's back_to_front and matches
+// hold for the back cloud scaled by it (ScaleSideCloud).
 // Throws orchard::Error with the reason when the sides cannot be registered:
 // too few clusters, no consistent alignment (different rows, unrelated
 // videos), or sides that cover different stretches of the row. `given`: the

@@ -22,6 +22,15 @@ void UpdateClusterExtent(SideCluster* c) {
   c->centre /= static_cast<double>(c->points.size());
 }
 
+void ScaleSideCloud(SideCloud* side, double scale) {
+  for (auto& p : side->sparse) p *= scale;
+  for (auto& p : side->cameras) p *= scale;
+  for (auto& c : side->clusters) {
+    for (auto& p : c.points) p *= scale;
+    UpdateClusterExtent(&c);
+  }
+}
+
 Eigen::Isometry3d RowFrameTransform(const Eigen::Vector3d& origin, const Eigen::Vector3d& along,
                                     const Eigen::Vector3d& across, const Eigen::Vector3d& up) {
   Eigen::Matrix3d axes;

@@ -40,6 +40,10 @@ struct SideCloud {
 // Fills centre, min and max from the points.
 void UpdateClusterExtent(SideCluster* cluster);
 
+// Scales the side's clusters, sparse points and cameras about its row
+// frame's origin (on the ground under the camera path).
+void ScaleSideCloud(SideCloud* side, double scale);
+
 // The row frame as a transform from origin and axes (columns of the rotation
 // are along, across, up).
 Eigen::Isometry3d RowFrameTransform(const Eigen::Vector3d& origin, const Eigen::Vector3d& along,
