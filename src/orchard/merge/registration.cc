@@ -77,9 +77,18 @@ std::vector<Eigen::Vector3d> Transformed(const Eigen::Isometry3d& t, const std::
   return moved;
 }
 
-std::vector<Eigen::Vector3d> Scaled(std::vector<Eigen::Vector3d> points, double scale) {
-  for (auto& p : points) p *= scale;
-  return points;
+// A back point placed in the front row frame: scaled about the back's
+// origin, then turned and shifted.
+Eigen::Vector3d Place(double heading_deg, double scale, const Eigen::Vector2d& offset, const Eigen::Vector3d& p) {
+  return BackToFrontTransform(heading_deg, offset.x(), offset.y()) * Eigen::Vector3d(scale * p);
+}
+
+std::vector<Eigen::Vector3d> Placed(const Fit& f, const std::vector<Eigen::Vector3d>& back) {
+  const Eigen::Isometry3d t = BackToFrontTransform(f.heading_deg, f.offset.x(), f.offset.y());
+  std::vector<Eigen::Vector3d> moved;
+  moved.reserve(back.size());
+  for (const auto& p : back) moved.push_back(t * Eigen::Vector3d(f.scale * p));
+  return moved;
 }
 
 // RMS distance between corresponding points.
@@ -105,9 +114,7 @@ Fit Refine(const std::vector<Eigen::Vector3d>& front, const std::vector<Eigen::V
   fit.scale = start.scale;
   fit.offset = start.offset;
   for (int it = 0; it < o.refine_iterations; ++it) {
-    auto pairs = MatchCentres(
-        front, Transformed(BackToFrontTransform(fit.heading_deg, fit.offset.x(), fit.offset.y()), Scaled(back, fit.scale)),
-        o.match_distance);
+    auto pairs = MatchCentres(front, Placed(fit, back), o.match_distance);
     if (pairs.size() < 3) {
       fit.pairs = pairs;
       break;
@@ -141,8 +148,7 @@ Fit Refine(const std::vector<Eigen::Vector3d>& front, const std::vector<Eigen::V
     fit.heading_deg = heading, fit.scale = scale, fit.offset = offset, fit.pairs = std::move(pairs);
     if (converged) break;
   }
-  const auto moved =
-      Transformed(BackToFrontTransform(fit.heading_deg, fit.offset.x(), fit.offset.y()), Scaled(back, fit.scale));
+  const auto moved = Placed(fit, back);
   fit.pairs = MatchCentres(front, moved, o.match_distance);
   fit.residual = RmsDistance(front, moved, fit.pairs);
   return fit;
@@ -246,12 +252,12 @@ Registration RegisterSides(const SideCloud& front, const SideCloud& back, const 
   // put the back side's centre, within 0.5 m): neighbouring headings and
   // scales all peak at the true alignment, and the best alignment elsewhere
   // must be refined too for the distinctness check.
-  Eigen::Vector2d back_centre = Eigen::Vector2d::Zero();
-  for (const auto& b : bc) back_centre += b.head<2>() / static_cast<double>(bc.size());
+  Eigen::Vector3d back_centre = Eigen::Vector3d::Zero();
+  for (const auto& b : bc) back_centre += b / static_cast<double>(bc.size());
   std::vector<Candidate> selected;
   std::vector<Eigen::Vector2d> selected_at;
   for (const auto& p : peaks) {
-    const Eigen::Vector2d at = p.scale * (Eigen::Rotation2Dd(M_PI + p.heading_deg * M_PI / 180) * back_centre) + p.offset;
+    const Eigen::Vector2d at = Place(p.heading_deg, p.scale, p.offset, back_centre).head<2>();
     int near = 0;
     for (const auto& q : selected_at) near += (q - at).norm() < 0.5;
     if (near >= 4) continue;
@@ -271,15 +277,14 @@ Registration RegisterSides(const SideCloud& front, const SideCloud& back, const 
   // Another alignment moves the back side's clusters by more than 0.5 m
   // (RMS) from where the best puts them: fits at neighbouring headings and
   // scales that agree about the middle of the row are the same alignment.
-  auto placed = [&](const Fit& f) {
-    return Transformed(BackToFrontTransform(f.heading_deg, f.offset.x(), f.offset.y()), Scaled(bc, f.scale));
-  };
-  const std::vector<Eigen::Vector3d> best_placed = placed(best);
+  const std::vector<Eigen::Vector3d> best_placed = Placed(best, bc);
   int chance = 0;
   for (const auto& f : fits)
-    if (RmsDistance(best_placed, placed(f)) > 0.5) chance = std::max(chance, static_cast<int>(f.pairs.size()));
+    if (RmsDistance(best_placed, Placed(f, bc)) > 0.5) chance = std::max(chance, static_cast<int>(f.pairs.size()));
 
-  SideCloud scaled_back = back;
+  // The matches and extents need the back's clusters only, not its sparse points.
+  SideCloud scaled_back;
+  scaled_back.name = back.name, scaled_back.clusters = back.clusters;
   ScaleSideCloud(&scaled_back, best.scale);
   Registration r =
       EvaluateAlignment(front, scaled_back, BackToFrontTransform(best.heading_deg, best.offset.x(), best.offset.y()), o);
@@ -293,12 +298,9 @@ Registration RegisterSides(const SideCloud& front, const SideCloud& back, const 
     Fail("the two sides share too few fruit clusters (", r.matched, " of the ", fewer,
          " on the side with fewer): they do not show the same row, or the detections are too sparse to register "
          "them (give poses in one frame with --poses-registered)");
-  // Another alignment is the same one if within 0.5 m and 3 degrees.
-  auto same = [](const Registration& a, const Registration& b) {
-    return std::hypot(a.along - b.along, a.across - b.across) <= 0.5 && std::abs(a.heading_deg - b.heading_deg) <= 3;
-  };
+  // The given poses imply the same alignment by the measure above.
   if (r.matched < o.min_distinctness * std::max(chance, 1) && given != nullptr &&
-      same(r, EvaluateAlignment(front, back, *given, o)))
+      RmsDistance(best_placed, Transformed(*given, bc)) <= 0.5)
     r.settled_by_given_poses = true;
   if (!r.settled_by_given_poses && r.matched < o.min_distinctness * std::max(chance, 1))
     Fail("the two sides' alignment is ambiguous (", r.matched, " clusters matched at the best alignment, ", chance,
