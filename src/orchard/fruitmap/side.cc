@@ -734,7 +734,8 @@ Json ScoreAgainstTruth(const fs::path& truth, const std::vector<CameraView>& vie
                t.count, t.visible, t.visible ? 100.0 * (t.count - t.visible) / t.visible : 0.0, t.found, t.missed,
                t.duplicates, t.over_counted, t.not_visible);
   return Json{{"apples", (dir.parent_path() / "apples.csv").string()}, {"visible", t.visible}, {"count", t.count},
-              {"found", t.found}, {"missed", t.missed}, {"duplicates", t.duplicates},
+              {"found", t.found}, {"missed", t.missed}, {"missed_without_points", t.missed_without_points},
+              {"missed_ids", t.missed_ids}, {"duplicates", t.duplicates},
               {"over_counted", t.over_counted}, {"not_visible", t.not_visible}};
 }
 

@@ -78,6 +78,13 @@ SideTruthScore ScoreSideAgainstTruth(const std::vector<CameraView>& views, const
   }
   s.found = static_cast<int>(found.size());
   s.missed = s.visible - s.found;
+  std::set<int> voted;
+  for (const auto& [neg_votes, k, apple] : pairs) voted.insert(apple);
+  for (const int apple : visible)
+    if (!found.count(apple)) {
+      s.missed_ids.push_back(apple);
+      if (!voted.count(apple)) ++s.missed_without_points;
+    }
   for (size_t k = 0; k < kept.size(); ++k) {
     const int left = result.clusters[kept[k]].count - credited[k];
     if (left <= 0) continue;

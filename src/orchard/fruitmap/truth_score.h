@@ -35,6 +35,10 @@ struct SideTruthScore {
   int count = 0;         // the kept clusters' counts summed
   int found = 0;         // visible apples credited to a kept cluster
   int missed = 0;        // visible - found
+  // Of the missed: apples no kept cluster's points voted for (the 3D stage has
+  // no fruit on them), the rest sit in clusters counted below their apples.
+  int missed_without_points = 0;
+  std::vector<int> missed_ids;  // 0-based apple ids, ascending
   int duplicates = 0;    // counts of kept clusters credited with no apple, on an apple another cluster holds
   int over_counted = 0;  // counts above the apples credited, of clusters credited with some
   int not_visible = 0;   // counts of clusters on no visible apple (next row, fallen, chance pairings)

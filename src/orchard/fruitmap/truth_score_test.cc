@@ -78,6 +78,8 @@ TEST(ScoreSideAgainstTruth, SplitsTheCountIntoFoundMissedDuplicatedAndNotVisible
   EXPECT_EQ(s.count, 6);
   EXPECT_EQ(s.found, 3);
   EXPECT_EQ(s.missed, 1);
+  EXPECT_EQ(s.missed_ids, std::vector<int>{2});
+  EXPECT_EQ(s.missed_without_points, 1);  // only a removed cluster holds it
   EXPECT_EQ(s.duplicates, 1);
   EXPECT_EQ(s.over_counted, 1);
   EXPECT_EQ(s.not_visible, 1);
@@ -88,6 +90,12 @@ TEST(ScoreSideAgainstTruth, SplitsTheCountIntoFoundMissedDuplicatedAndNotVisible
   const SideTruthScore t = ScoreSideAgainstTruth(views, masks, {0, 1}, touching);
   EXPECT_EQ(t.found, 2);
   EXPECT_EQ(t.missed + t.duplicates + t.over_counted + t.not_visible, 0);
+  // Counted 1, the cluster holds one of them: the other is missed with points.
+  ClusterResult low;
+  AddCluster(&low, 1, {apples[0], apples[0], apples[1], apples[1], apples[1]});
+  const SideTruthScore u = ScoreSideAgainstTruth(views, masks, {0, 1}, low);
+  EXPECT_EQ(u.missed_ids, std::vector<int>{0});
+  EXPECT_EQ(u.missed_without_points, 0);
 }
 
 TEST(ScoreSideAgainstTruth, MasksThatDoNotMatchTheViewsFail) {
