@@ -65,6 +65,9 @@ void AddDemoCommand(CLI::App& app) {
     // The true poses share one frame; registering from the fruit needs more
     // clusters than the shipped detectors find on a two-tree row.
     options.poses_registered = !a->colmap;
+    // Both videos film the one row generated here: with COLMAP poses a
+    // registration on the canopy alone may be taken (it warns).
+    options.row.assume_same_row = true;
     const YieldSummary y = RunYield(in, options);
 
     auto percent = [](double estimate, double reference) { return reference > 0 ? 100.0 * estimate / reference : 0.0; };

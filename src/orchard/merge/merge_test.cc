@@ -244,11 +244,21 @@ void RowSides(const RowScene& scene, const Eigen::Isometry3d& back_to_front, Sid
 
 TEST(RowRegistrationTest, RecoversKnownTransformsWithoutSharedFruit) {
   // The apples seen by both sides are too few for the fruit registration.
+  // Without shared fruit the row's shape alone cannot tell it from another
+  // row of the same planting: it takes the user's word (--same-row).
+  RowRegistrationOptions same_row;
+  same_row.assume_same_row = true;
   for (const auto& [along, across] : {std::pair{0.0, 5.0}, {0.4, 5.3}, {-0.8, 4.7}}) {
     SideCloud front, back;
     RowSides(RowScene(), BackToFrontTransform(0, along, across), &front, &back);
     EXPECT_THROW(RegisterSides(front, back, RegistrationOptions()), Error);
-    const Registration r = RegisterSidesOnRow(front, back, RowRegistrationOptions());
+    try {
+      RegisterSidesOnRow(front, back, RowRegistrationOptions());
+      FAIL() << "registered on the canopy alone without --same-row";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("--same-row"), std::string::npos) << e.what();
+    }
+    const Registration r = RegisterSidesOnRow(front, back, same_row);
     EXPECT_TRUE(r.on_row);
     EXPECT_NEAR(r.heading_deg, 0, 1e-9);  // kept at the half turn
     EXPECT_NEAR(r.along, along, 0.05);
@@ -266,19 +276,19 @@ TEST(RowRegistrationTest, RecoversKnownTransformsWithoutSharedFruit) {
     RowSides(RowScene(), BackToFrontTransform(0, 0, 5.0), &front, &back);
     front.row_distance = back.row_distance = 0.9;
     try {
-      RegisterSidesOnRow(front, back, RowRegistrationOptions());
+      RegisterSidesOnRow(front, back, same_row);
       FAIL() << "placed the sides farther apart than the row allows";
     } catch (const Error& e) {
       EXPECT_NE(std::string(e.what()).find("not its own row's"), std::string::npos) << e.what();
     }
     front.row_distance = back.row_distance = 2.0;  // 4.94 m within 2.0 + 2.0 + 3 m
-    EXPECT_NO_THROW(RegisterSidesOnRow(front, back, RowRegistrationOptions()));
+    EXPECT_NO_THROW(RegisterSidesOnRow(front, back, same_row));
   }
   // A path not quite parallel (0.5 deg): the half turn is kept, so the
   // heading is off by that much and the offsets stay close.
   SideCloud front, back;
   RowSides(RowScene(), BackToFrontTransform(0.5, 0.3, 5.0), &front, &back);
-  const Registration r = RegisterSidesOnRow(front, back, RowRegistrationOptions());
+  const Registration r = RegisterSidesOnRow(front, back, same_row);
   EXPECT_NEAR(r.along, 0.3, 0.06);
   EXPECT_NEAR(r.across, 5.0 - 0.06, 0.06);
 }
@@ -316,8 +326,10 @@ TEST(RowRegistrationTest, FailsOnTheSameSideGivenTwice) {
   RowSides(RowScene(), BackToFrontTransform(0, 0, 5), &front, &back);
   SideCloud again = front;
   again.name = "back";
+  RowRegistrationOptions o;
+  o.assume_same_row = true;  // reach the faces check (no fruit is shared)
   try {
-    RegisterSidesOnRow(front, again, RowRegistrationOptions());
+    RegisterSidesOnRow(front, again, o);
     FAIL() << "registered a side with itself";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("same row"), std::string::npos) << e.what();
@@ -333,8 +345,10 @@ TEST(RowRegistrationTest, FailsWhenTheProfilesDoNotMatch) {
   other.trees = {-1.0, 0.1, 3.9};
   other.seed = 2;
   RowSides(other, t, &other_front, &other_back);
+  RowRegistrationOptions o;
+  o.assume_same_row = true;  // the profiles alone must tell these rows apart
   try {
-    RegisterSidesOnRow(front, other_back, RowRegistrationOptions());
+    RegisterSidesOnRow(front, other_back, o);
     FAIL() << "registered two different rows";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("same row"), std::string::npos) << e.what();
@@ -349,13 +363,46 @@ TEST(RowRegistrationTest, FailsWhenTheSidesCoverDifferentStretches) {
   scene.seen_front_lo = -2, scene.seen_front_hi = 6, scene.seen_back_lo = 3, scene.seen_back_hi = 11;
   SideCloud front, back;
   RowSides(scene, BackToFrontTransform(0, 0, 5), &front, &back);
+  RowRegistrationOptions o;
+  o.assume_same_row = true;  // the path overlap alone must stop it
   try {
-    RegisterSidesOnRow(front, back, RowRegistrationOptions());
+    RegisterSidesOnRow(front, back, o);
     FAIL() << "registered sides that cover different stretches";
   } catch (const Error& e) {
     const std::string m = e.what();
     EXPECT_TRUE(m.find("different stretches") != std::string::npos || m.find("same row") != std::string::npos) << m;
   }
+}
+
+TEST(RowRegistrationTest, StopsOnSidesOfTwoRowsOfOnePlanting) {
+  // Two rows of one planting grid: the same trees, other leaves. Their
+  // canopy profiles agree, and no apple is seen from both sides.
+  SideCloud front, back, other_front, other_back;
+  const Eigen::Isometry3d t = BackToFrontTransform(0, 0, 5);
+  RowSides(RowScene(), t, &front, &back);
+  RowScene other;
+  other.seed = 3;
+  RowSides(other, t, &other_front, &other_back);
+  try {
+    RegisterSidesOnRow(front, other_back, RowRegistrationOptions());
+    FAIL() << "registered the sides of two rows on their canopies";
+  } catch (const Error& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("another row of the same planting"), std::string::npos) << m;
+    EXPECT_NE(m.find("--same-row"), std::string::npos) << m;
+  }
+  // Why it stops: on the user's word the canopies register as well as a
+  // row's own sides do.
+  RowRegistrationOptions o;
+  o.assume_same_row = true;
+  EXPECT_GT(RegisterSidesOnRow(front, other_back, o).correlation, o.min_correlation);
+  // One shared apple too few for the across distance is still no evidence;
+  // enough of them are (TakesTheAcrossDistanceFromSharedFruit).
+  RowScene few;
+  few.shared = 2;
+  SideCloud few_front, few_back;
+  RowSides(few, t, &few_front, &few_back);
+  EXPECT_THROW(RegisterSidesOnRow(few_front, few_back, RowRegistrationOptions()), Error);
 }
 
 TEST(RowRegistrationTest, LevelsASideOnTheGroundOfItsSparsePoints) {

@@ -328,6 +328,12 @@ Registration RegisterSidesOnRow(const SideCloud& front, const SideCloud& back, c
   if (best_fit.matched >= o.min_matched && best_fit.matched >= o.min_distinctness * std::max(chance, 1)) {
     along = best_fit.along, across = best_fit.across;
   } else {
+    if (!o.assume_same_row)
+      Fail("the fruit clusters of the two sides do not place them across the row (", best_fit.matched,
+           " matched at best, ", chance, " at another distance; need ", o.min_matched, " and ", o.min_distinctness,
+           "x), and the canopy's shape alone (profile correlation ", correlation,
+           ") cannot tell this row from another row of the same planting: check that both videos film the same "
+           "row; if they do, rerun with --same-row to register the sides on the canopy alone");
     // Each side is assumed to see into the canopy up to the row's centre plane.
     std::vector<double> yf, yb;
     for (const auto& p : canopy_f) yf.push_back(p.y());

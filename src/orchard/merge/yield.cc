@@ -238,16 +238,16 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
       method = "row: levelled grounds, canopy profiles along the row, " +
                std::string(y.registration.across_assumed ? "across assumed (canopy centre plane)"
                                                          : "across from shared fruit clusters");
-      // Rows of one planting grid have alike canopy profiles: the sides of
-      // two different synthetic rows correlated 0.97-0.99, one row's own
-      // sides 0.94-0.99. Without a shared apple nothing here tells them apart.
+      // Only with --same-row (the row registration stops otherwise): rows of
+      // one planting have alike canopy profiles, so the count rests on the
+      // user's word.
       if (y.registration.across_assumed) {
         const std::string w =
             "no fruit clusters clearly seen from both sides: the sides were registered on the canopy's shape alone "
             "(profile correlation " +
             std::to_string(y.registration.correlation) +
-            "), which cannot tell this row from another row of the same planting: check that both videos film the "
-            "same row";
+            "), taken as the same row on the user's word (--same-row); the canopy cannot tell this row from another "
+            "row of the same planting";
         spdlog::warn("{}", w);
         merge_warnings.push_back(w);
       }
@@ -360,6 +360,7 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
       {"match_distance_m", o.registration.match_distance},
       {"max_scale_change", o.registration.max_scale_change},
       {"row_registration", o.row_registration},
+      {"same_row", o.row.assume_same_row},
       {"intersection_distance_m", shared_options.intersection_distance},
       {"intersection_floor_m", o.shared.intersection_distance},
       {"intersection_per_residual", o.intersection_per_residual},
