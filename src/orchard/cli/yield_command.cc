@@ -50,6 +50,8 @@ void AddYieldCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--no-row-registration{false}", o.row_registration,
                 "Register the sides from their shared fruit clusters only (no fallback to the row's ground and canopy)");
+  cmd->add_flag("--no-fallen-landmarks{false}", o.fallen_landmarks,
+                "Register the sides on the fruit on the trees only (not also on the fallen apples both sides see)");
   cmd->add_flag("--same-row", o.row.assume_same_row,
                 "Both videos film the same row: when no fruit is clearly seen from both sides, register them on the "
                 "canopy's shape alone (it cannot tell rows of one planting apart, so without this the run stops)");

@@ -9,6 +9,8 @@
 #include <gtest/gtest.h>
 
 #include "orchard/core/error.h"
+#include "orchard/core/test_util.h"
+#include "orchard/core/file_io.h"
 #include "orchard/merge/registration.h"
 #include "orchard/merge/row_registration.h"
 #include "orchard/merge/shared_count.h"
@@ -74,6 +76,39 @@ TEST(RegistrationTest, RecoversKnownTransforms) {
     EXPECT_GT(r.overlap, 4.5);
     EXPECT_LT(r.chance_matched * 1.5, r.matched);
   }
+}
+
+TEST(RegistrationTest, FallenApplesRegisterSidesThatShareNoHangingOne) {
+  // A canopy no apple of which is seen from both sides, and fallen apples on
+  // the ground under it that both sides see (the side stage removes them as
+  // fallen; they are landmarks, not counted).
+  const std::vector<Eigen::Vector3d> apples = Canopy(150, 0, 5, 4);
+  const Eigen::Isometry3d truth = BackToFrontTransform(1.5, 0.4, 5.1);
+  SideCloud front, back;
+  Sides(apples, truth, 5, &front, &back);
+  auto seen_by_both = [](const SideCluster& c) { return c.centre.y() > 2.4 && c.centre.y() < 2.6; };
+  front.clusters.erase(std::remove_if(front.clusters.begin(), front.clusters.end(), seen_by_both), front.clusters.end());
+  back.clusters.erase(std::remove_if(back.clusters.begin(), back.clusters.end(),
+                                     [&](const SideCluster& c) { return seen_by_both(Cluster(0, 1, {truth * c.centre})); }),
+                      back.clusters.end());
+  EXPECT_THROW(RegisterSides(front, back, RegistrationOptions()), Error);
+  std::mt19937 rng(6);
+  std::uniform_real_distribution<double> ux(0, 5), uy(2.0, 3.0), uz(0.03, 0.05);
+  std::normal_distribution<double> noise(0, 0.01);
+  for (int i = 0; i < 24; ++i) {
+    const Eigen::Vector3d p(ux(rng), uy(rng), uz(rng)), n(noise(rng), noise(rng), 0);
+    front.fallen.push_back(Cluster(1000 + i, 1, {p + n}));
+    back.fallen.push_back(Cluster(1000 + i, 1, {truth.inverse() * (p - n)}));
+  }
+  const SideCloud front_marks = WithFallenLandmarks(front), back_marks = WithFallenLandmarks(back);
+  EXPECT_EQ(front_marks.clusters.size(), front.clusters.size() + 24);
+  EXPECT_TRUE(front_marks.fallen.empty());
+  const Registration r = RegisterSides(front_marks, back_marks, RegistrationOptions());
+  EXPECT_NEAR(r.heading_deg, 1.5, 0.3);
+  EXPECT_NEAR(r.along, 0.4, 0.03);
+  EXPECT_NEAR(r.across, 5.1, 0.03);
+  EXPECT_GE(r.matched, 22);
+  EXPECT_LE(r.matched, 24 + 2);
 }
 
 TEST(RegistrationTest, RecoversTheBackSidesScale) {
@@ -511,6 +546,31 @@ TEST(SideCloudTest, MissingSideOutputsAreAClearError) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("side.json is missing"), std::string::npos) << e.what();
   }
+}
+
+TEST(SideCloudTest, LoadsKeptAndFallenClusters) {
+  const fs::path dir = test::FreshTempDir("side_cloud_fallen");
+  WriteTextFileAtomic(dir / "side.json",
+                      R"({"count": 3, "row_frame": {"origin": [0, 0, 0], "along": [1, 0, 0], "across": [0, 1, 0],)"
+                      R"( "up": [0, 0, 1]}})");
+  WriteTextFileAtomic(dir / "clusters.csv",
+                      "id,x,y,z,extent_x,extent_y,extent_z,points,count,status\n"
+                      "1,0,2,1,0,0,0,2,3,kept\n"
+                      "2,1,2,0.04,0,0,0,1,1,fallen\n"
+                      "3,2,6,1,0,0,0,1,1,next_row\n"
+                      "4,3,2,0.04,0,0,0,0,1,fallen\n");  // no points: left out
+  WriteTextFileAtomic(dir / "fruit.ply",
+                      "ply\nformat ascii 1.0\nend_header\n0 2 1 0 0 0 1\n0.1 2 1 0 0 0 1\n1 2 0.04 0 0 0 2\n"
+                      "2 6 1 0 0 0 3\n");
+  SideCloud cloud = LoadSideCloud(dir, "front");
+  ASSERT_EQ(cloud.clusters.size(), 1u);
+  EXPECT_EQ(cloud.clusters[0].points.size(), 2u);
+  EXPECT_EQ(cloud.clusters[0].count, 3);
+  ASSERT_EQ(cloud.fallen.size(), 1u);
+  EXPECT_EQ(cloud.fallen[0].id, 2);
+  EXPECT_TRUE(cloud.fallen[0].centre.isApprox(Eigen::Vector3d(1, 2, 0.04)));
+  ScaleSideCloud(&cloud, 2);
+  EXPECT_TRUE(cloud.fallen[0].centre.isApprox(Eigen::Vector3d(2, 4, 0.08)));
 }
 
 TEST(SideCloudTest, RowFrameTransformMapsTheAxes) {

@@ -141,7 +141,8 @@ std::string YieldReportHtml(const nlohmann::json& y, const std::vector<MapCluste
     << "<tr><td>heading (beyond facing each other)</td><td>" << Num(a.at("heading_deg").get<double>(), 2) << "&deg;</td></tr>"
     << "<tr><td>offset along the row</td><td>" << Num(a.at("along_m").get<double>(), 3) << " m</td></tr>"
     << "<tr><td>distance between the camera paths</td><td>" << Num(a.at("across_m").get<double>(), 3) << " m</td></tr>"
-    << "<tr><td>clusters matched across the sides</td><td>" << a.at("matched").get<int>() << "</td></tr>"
+    << "<tr><td>clusters matched across the sides (of them fallen apples)</td><td>" << a.at("matched").get<int>()
+    << " (" << a.value("matched_fallen", 0) << ")</td></tr>"
     << "<tr><td>residual (RMS distance of matched clusters)</td><td>" << Num(100 * a.at("residual_m").get<double>(), 1)
     << " cm</td></tr>"
     << "<tr><td>best match count of any other alignment</td><td>" << a.at("chance_matched").get<int>() << "</td></tr>"

@@ -209,10 +209,11 @@ Levelling LevelOnSparseGround(SideCloud* side, const RowRegistrationOptions& o) 
   auto move = [&](const Eigen::Vector3d& p) { return Eigen::Vector3d(l.scale * (rot * (p - origin))); };
   for (auto& p : side->sparse) p = move(p);
   for (auto& p : side->cameras) p = move(p);
-  for (auto& c : side->clusters) {
-    for (auto& p : c.points) p = move(p);
-    UpdateClusterExtent(&c);
-  }
+  for (auto* clusters : {&side->clusters, &side->fallen})
+    for (auto& c : *clusters) {
+      for (auto& p : c.points) p = move(p);
+      UpdateClusterExtent(&c);
+    }
   l.transform.linear() = l.scale * rot;
   l.transform.translation() = -l.scale * rot * origin;
   l.changed = true;

@@ -1,5 +1,6 @@
 #include "orchard/merge/side_cloud.h"
 
+#include <algorithm>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -25,10 +26,18 @@ void UpdateClusterExtent(SideCluster* c) {
 void ScaleSideCloud(SideCloud* side, double scale) {
   for (auto& p : side->sparse) p *= scale;
   for (auto& p : side->cameras) p *= scale;
-  for (auto& c : side->clusters) {
-    for (auto& p : c.points) p *= scale;
-    UpdateClusterExtent(&c);
-  }
+  for (auto* clusters : {&side->clusters, &side->fallen})
+    for (auto& c : *clusters) {
+      for (auto& p : c.points) p *= scale;
+      UpdateClusterExtent(&c);
+    }
+}
+
+SideCloud WithFallenLandmarks(const SideCloud& side) {
+  SideCloud with = side;
+  with.clusters.insert(with.clusters.end(), side.fallen.begin(), side.fallen.end());
+  with.fallen.clear();
+  return with;
 }
 
 Eigen::Isometry3d RowFrameTransform(const Eigen::Vector3d& origin, const Eigen::Vector3d& along,
@@ -70,8 +79,8 @@ SideCloud LoadSideCloud(const fs::path& dir, const std::string& name) {
   } catch (const nlohmann::json::exception& e) {
     Fail(name, " side: ", json_path.string(), " has no usable row_frame/count (made by an older version?): ", e.what());
   }
-  // Kept clusters and their counts.
-  std::map<int, size_t> index;  // cluster id -> position in cloud.clusters
+  // Kept and fallen clusters and their counts.
+  std::map<int, SideCluster*> index;  // cluster id -> its place in cloud.clusters or cloud.fallen
   {
     std::istringstream csv(ReadTextFile(csv_path));
     std::string line;
@@ -85,7 +94,7 @@ SideCloud LoadSideCloud(const fs::path& dir, const std::string& name) {
       std::string item;
       while (std::getline(ls, item, ',')) f.push_back(item);
       if (f.size() < 10) Fail(name, " side: ", csv_path.string(), " line ", row, " has ", f.size(), " fields");
-      if (f[9] != "kept") continue;
+      if (f[9] != "kept" && f[9] != "fallen") continue;
       SideCluster c;
       try {
         c.id = std::stoi(f[0]);
@@ -93,10 +102,12 @@ SideCloud LoadSideCloud(const fs::path& dir, const std::string& name) {
       } catch (const std::exception&) {
         Fail(name, " side: ", csv_path.string(), " line ", row, ": bad id or count");
       }
-      index[c.id] = cloud.clusters.size();
-      cloud.clusters.push_back(c);
+      (f[9] == "kept" ? cloud.clusters : cloud.fallen).push_back(c);
     }
   }
+  // Pointers once the vectors stop growing.
+  for (auto* clusters : {&cloud.clusters, &cloud.fallen})
+    for (auto& c : *clusters) index[c.id] = &c;
   // Fruit points (ascii PLY written by RunSide: x y z r g b cluster).
   {
     std::ifstream ply(ply_path);
@@ -115,7 +126,7 @@ SideCloud LoadSideCloud(const fs::path& dir, const std::string& name) {
       if (!(ls >> p.x() >> p.y() >> p.z() >> r >> g >> b >> id))
         Fail(name, " side: ", ply_path.string(), " line ", line_no, " is not 'x y z r g b cluster'");
       const auto it = index.find(id);
-      if (it != index.end()) cloud.clusters[it->second].points.push_back(cloud.to_row * p);
+      if (it != index.end()) it->second->points.push_back(cloud.to_row * p);
     }
     if (header) Fail(name, " side: ", ply_path.string(), " has no PLY header");
   }
@@ -157,6 +168,11 @@ SideCloud LoadSideCloud(const fs::path& dir, const std::string& name) {
     if (c.points.empty()) Fail(name, " side: cluster ", c.id, " of ", csv_path.string(), " has no points in ", ply_path.string());
     UpdateClusterExtent(&c);
   }
+  // Landmarks only: one without points is left out.
+  cloud.fallen.erase(std::remove_if(cloud.fallen.begin(), cloud.fallen.end(),
+                                    [](const SideCluster& c) { return c.points.empty(); }),
+                     cloud.fallen.end());
+  for (auto& c : cloud.fallen) UpdateClusterExtent(&c);
   return cloud;
 }
 

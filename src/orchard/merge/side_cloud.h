@@ -28,6 +28,10 @@ struct SideCloud {
   // Poses' frame -> row frame.
   Eigen::Isometry3d to_row = Eigen::Isometry3d::Identity();
   std::vector<SideCluster> clusters;  // kept clusters only
+  // Clusters the side removed as fallen (on the ground): never counted, but
+  // both sides see the apples lying under the row, so they are landmarks for
+  // the registration (WithFallenLandmarks).
+  std::vector<SideCluster> fallen;
   int count = 0;                      // the side's count (sum over kept clusters)
   // COLMAP's sparse points (sparse/points3D.txt, scaled like the poses):
   // leaves, branches, trunks and ground of the row. Empty with given poses.
@@ -40,17 +44,21 @@ struct SideCloud {
 // Fills centre, min and max from the points.
 void UpdateClusterExtent(SideCluster* cluster);
 
-// Scales the side's clusters, sparse points and cameras about its row
-// frame's origin (on the ground under the camera path).
+// Scales the side's clusters (kept and fallen), sparse points and cameras
+// about its row frame's origin (on the ground under the camera path).
 void ScaleSideCloud(SideCloud* side, double scale);
+
+// A copy whose clusters are the kept and the fallen ones, for the
+// registration (fallen emptied).
+SideCloud WithFallenLandmarks(const SideCloud& side);
 
 // The row frame as a transform from origin and axes (columns of the rotation
 // are along, across, up).
 Eigen::Isometry3d RowFrameTransform(const Eigen::Vector3d& origin, const Eigen::Vector3d& along,
                                     const Eigen::Vector3d& across, const Eigen::Vector3d& up);
 
-// Reads side.json (row_frame, count), clusters.csv (kept clusters and their
-// counts), fruit.ply (points with cluster ids) and, when present,
+// Reads side.json (row_frame, count), clusters.csv (kept and fallen clusters,
+// their counts), fruit.ply (points with cluster ids) and, when present,
 // sparse/points3D.txt and images.txt of `side_dir`. Throws orchard::Error naming the file
 // when one is missing or malformed.
 SideCloud LoadSideCloud(const fs::path& side_dir, const std::string& name);

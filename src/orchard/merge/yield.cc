@@ -188,15 +188,21 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
   }
   std::string method;
   Json given_check;
+  // What the registration matches: the kept clusters and, unless turned off,
+  // the fallen ones (the apples lying under the row both sides see).
+  const auto landmarks = [&](const SideCloud& side) {
+    return o.fallen_landmarks ? WithFallenLandmarks(side) : side;
+  };
   // The transform the given poses imply when both are in one frame.
   const Eigen::Isometry3d given = front_cloud.to_row * back_cloud.to_row.inverse();
   if (o.poses_registered) {
-    y.registration = EvaluateAlignment(front_cloud, back_cloud, given, o.registration);
+    y.registration = EvaluateAlignment(landmarks(front_cloud), landmarks(back_cloud), given, o.registration);
     method = "given poses in one frame";
   } else {
     const bool both_given = !in.front.poses.empty() && !in.back.poses.empty();
     try {
-      y.registration = RegisterSides(front_cloud, back_cloud, o.registration, both_given ? &given : nullptr);
+      y.registration =
+          RegisterSides(landmarks(front_cloud), landmarks(back_cloud), o.registration, both_given ? &given : nullptr);
       method = "fruit clusters seen from both sides (Hough vote + closest points)";
       // The alignment holds for the back side at the scale it found (kept
       // once the canopies agree too).
@@ -231,7 +237,7 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
       }
       spdlog::info("fruit registration failed ({}); registering on the row", fruit_error.what());
       try {
-        y.registration = RegisterSidesOnRow(front_cloud, back_cloud, row_options);
+        y.registration = RegisterSidesOnRow(landmarks(front_cloud), landmarks(back_cloud), row_options);
       } catch (const Error& e) {
         fail_naming_broken_sides(e);
       }
@@ -255,7 +261,7 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
     if (both_given) {
       // Both sides came with poses: if they share a frame (the generator's
       // true poses, RTK-GNSS), this is the registration's error.
-      const Registration g = EvaluateAlignment(front_cloud, back_cloud, given, o.registration);
+      const Registration g = EvaluateAlignment(landmarks(front_cloud), landmarks(back_cloud), given, o.registration);
       given_check = {{"heading_deg", y.registration.heading_deg - g.heading_deg},
                      {"along_m", y.registration.along - g.along},
                      {"across_m", y.registration.across - g.across},
@@ -263,6 +269,13 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
     }
   }
   timings["registration"] = stopwatch.Lap();
+  // Of the matches, how many are fallen apples (reported).
+  int matched_fallen = 0;
+  if (o.fallen_landmarks) {
+    SideCloud front_fallen, back_fallen;
+    front_fallen.clusters = front_cloud.fallen, back_fallen.clusters = back_cloud.fallen;
+    matched_fallen = EvaluateAlignment(front_fallen, back_fallen, y.registration.back_to_front, o.registration).matched;
+  }
   spdlog::info("aligned: heading {:.2f} deg, along {:.3f} m, across {:.3f} m, {} clusters matched, residual {:.1f} cm",
                y.registration.heading_deg, y.registration.along, y.registration.across, y.registration.matched,
                100 * y.registration.residual);
@@ -339,6 +352,7 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
       {"warnings", warnings},
       {"version", ORCHARD_VERSION},
   };
+  j["alignment"]["matched_fallen"] = matched_fallen;
   if (!given_check.is_null()) j["alignment"]["minus_given_poses"] = given_check;
   if (!levelling.empty()) j["alignment"]["levelling"] = levelling;
   if (!face_json.is_null()) j["alignment"]["face_check"] = face_json;
@@ -360,6 +374,7 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
       {"match_distance_m", o.registration.match_distance},
       {"max_scale_change", o.registration.max_scale_change},
       {"row_registration", o.row_registration},
+      {"fallen_landmarks", o.fallen_landmarks},
       {"same_row", o.row.assume_same_row},
       {"intersection_distance_m", shared_options.intersection_distance},
       {"intersection_floor_m", o.shared.intersection_distance},

@@ -43,6 +43,13 @@ struct YieldOptions {
   // (row_registration.h). Its camera height is taken from `side`.
   bool row_registration = true;
   RowRegistrationOptions row;
+  // The clusters each side removed as fallen join the kept ones as landmarks
+  // for the registration (never counted): apples lying under the row are seen
+  // from both sides even where the canopy hides the hanging ones. A thick
+  // canopy (seed 354, COLMAP, U-Net) was ambiguous on its fruit (12 matched,
+  // 8 elsewhere) and registers with them (19); rows 346-353 move by at most
+  // 0.16 deg and 1.2 cm (docs/yield.md).
+  bool fallen_landmarks = true;
   // The two videos must show opposite faces of the row (face_check.h); off
   // for the rare rows whose two faces look alike to a feature matcher.
   bool face_check = true;
