@@ -276,9 +276,10 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
     front_fallen.clusters = front_cloud.fallen, back_fallen.clusters = back_cloud.fallen;
     matched_fallen = EvaluateAlignment(front_fallen, back_fallen, y.registration.back_to_front, o.registration).matched;
   }
-  spdlog::info("aligned: heading {:.2f} deg, along {:.3f} m, across {:.3f} m, {} clusters matched, residual {:.1f} cm",
+  spdlog::info("aligned: heading {:.2f} deg, along {:.3f} m, across {:.3f} m, {} clusters matched ({} fallen), "
+               "residual {:.1f} cm",
                y.registration.heading_deg, y.registration.along, y.registration.across, y.registration.matched,
-               100 * y.registration.residual);
+               matched_fallen, 100 * y.registration.residual);
 
   // 4: shared apples once, outputs.
   spdlog::info("[yield 4/4] counting shared apples once, writing outputs");
