@@ -86,10 +86,12 @@ TEST(RegistrationTest, FallenApplesRegisterSidesThatShareNoHangingOne) {
   const Eigen::Isometry3d truth = BackToFrontTransform(1.5, 0.4, 5.1);
   SideCloud front, back;
   Sides(apples, truth, 5, &front, &back);
-  auto seen_by_both = [](const SideCluster& c) { return c.centre.y() > 2.4 && c.centre.y() < 2.6; };
-  front.clusters.erase(std::remove_if(front.clusters.begin(), front.clusters.end(), seen_by_both), front.clusters.end());
+  auto seen_by_both = [](const Eigen::Vector3d& p) { return p.y() > 2.4 && p.y() < 2.6; };
+  front.clusters.erase(std::remove_if(front.clusters.begin(), front.clusters.end(),
+                                      [&](const SideCluster& c) { return seen_by_both(c.centre); }),
+                       front.clusters.end());
   back.clusters.erase(std::remove_if(back.clusters.begin(), back.clusters.end(),
-                                     [&](const SideCluster& c) { return seen_by_both(Cluster(0, 1, {truth * c.centre})); }),
+                                     [&](const SideCluster& c) { return seen_by_both(truth * c.centre); }),
                       back.clusters.end());
   EXPECT_THROW(RegisterSides(front, back, RegistrationOptions()), Error);
   std::mt19937 rng(6);

@@ -189,20 +189,22 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
   std::string method;
   Json given_check;
   // What the registration matches: the kept clusters and, unless turned off,
-  // the fallen ones (the apples lying under the row both sides see).
+  // the fallen ones (the apples lying under the row both sides see). Made
+  // once for the registrations tried; the given poses' check below needs the
+  // back as the fruit registration rescaled it.
   const auto landmarks = [&](const SideCloud& side) {
     return o.fallen_landmarks ? WithFallenLandmarks(side) : side;
   };
+  const SideCloud front_marks = landmarks(front_cloud), back_marks = landmarks(back_cloud);
   // The transform the given poses imply when both are in one frame.
   const Eigen::Isometry3d given = front_cloud.to_row * back_cloud.to_row.inverse();
   if (o.poses_registered) {
-    y.registration = EvaluateAlignment(landmarks(front_cloud), landmarks(back_cloud), given, o.registration);
+    y.registration = EvaluateAlignment(front_marks, back_marks, given, o.registration);
     method = "given poses in one frame";
   } else {
     const bool both_given = !in.front.poses.empty() && !in.back.poses.empty();
     try {
-      y.registration =
-          RegisterSides(landmarks(front_cloud), landmarks(back_cloud), o.registration, both_given ? &given : nullptr);
+      y.registration = RegisterSides(front_marks, back_marks, o.registration, both_given ? &given : nullptr);
       method = "fruit clusters seen from both sides (Hough vote + closest points)";
       // The alignment holds for the back side at the scale it found (kept
       // once the canopies agree too).
@@ -237,7 +239,7 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
       }
       spdlog::info("fruit registration failed ({}); registering on the row", fruit_error.what());
       try {
-        y.registration = RegisterSidesOnRow(landmarks(front_cloud), landmarks(back_cloud), row_options);
+        y.registration = RegisterSidesOnRow(front_marks, back_marks, row_options);
       } catch (const Error& e) {
         fail_naming_broken_sides(e);
       }
@@ -261,7 +263,7 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
     if (both_given) {
       // Both sides came with poses: if they share a frame (the generator's
       // true poses, RTK-GNSS), this is the registration's error.
-      const Registration g = EvaluateAlignment(landmarks(front_cloud), landmarks(back_cloud), given, o.registration);
+      const Registration g = EvaluateAlignment(front_marks, landmarks(back_cloud), given, o.registration);
       given_check = {{"heading_deg", y.registration.heading_deg - g.heading_deg},
                      {"along_m", y.registration.along - g.along},
                      {"across_m", y.registration.across - g.across},
