@@ -729,13 +729,16 @@ Json ScoreAgainstTruth(const fs::path& truth, const std::vector<CameraView>& vie
     masks.push_back(ReadImage(path, cv::IMREAD_UNCHANGED));
   }
   const SideTruthScore t = ScoreSideAgainstTruth(views, masks, visible, result);
-  spdlog::info("truth: {} counted for {} visible ({:+.1f}%): {} found, {} missed; {} counted twice, {} above a "
-               "cluster's apples, {} on no visible apple",
+  const int glimpsed = t.visible_by_views_seen[0] + t.visible_by_views_seen[1] + t.visible_by_views_seen[2];
+  const int glimpsed_missed = t.missed_by_views_seen[0] + t.missed_by_views_seen[1] + t.missed_by_views_seen[2];
+  spdlog::info("truth: {} counted for {} visible ({:+.1f}%): {} found, {} missed ({} of the {} seen in at most two "
+               "views); {} counted twice, {} above a cluster's apples, {} on no visible apple",
                t.count, t.visible, t.visible ? 100.0 * (t.count - t.visible) / t.visible : 0.0, t.found, t.missed,
-               t.duplicates, t.over_counted, t.not_visible);
+               glimpsed_missed, glimpsed, t.duplicates, t.over_counted, t.not_visible);
   return Json{{"apples", (dir.parent_path() / "apples.csv").string()}, {"visible", t.visible}, {"count", t.count},
               {"found", t.found}, {"missed", t.missed}, {"missed_without_points", t.missed_without_points},
-              {"missed_ids", t.missed_ids}, {"duplicates", t.duplicates},
+              {"missed_ids", t.missed_ids}, {"visible_by_views_seen", t.visible_by_views_seen},
+              {"missed_by_views_seen", t.missed_by_views_seen}, {"duplicates", t.duplicates},
               {"over_counted", t.over_counted}, {"not_visible", t.not_visible}};
 }
 

@@ -2,6 +2,7 @@
 // through the library, count checked against truth.json.
 #include <cstdlib>
 #include <fstream>
+#include <numeric>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -82,6 +83,12 @@ TEST_F(SideTest, CountsTheVisibleApplesOnceFromTruePosesAndMasks) {
   EXPECT_EQ(t.at("count").get<int>(), s.count);
   EXPECT_EQ(t.at("found").get<int>() + t.at("missed").get<int>(), visible);
   EXPECT_GT(t.at("found").get<int>(), 0.8 * visible);
+  // The visible and missed apples by the views that show them add up.
+  const auto by_visible = t.at("visible_by_views_seen").get<std::vector<int>>();
+  const auto by_missed = t.at("missed_by_views_seen").get<std::vector<int>>();
+  EXPECT_EQ(std::accumulate(by_visible.begin(), by_visible.end(), 0), visible);
+  EXPECT_EQ(std::accumulate(by_missed.begin(), by_missed.end(), 0), t.at("missed").get<int>());
+  EXPECT_EQ(by_visible[0], 0);  // every frame is a view: a visible apple shows in one at least
   EXPECT_EQ(s.count - visible, t.at("duplicates").get<int>() + t.at("over_counted").get<int>() +
                                    t.at("not_visible").get<int>() - t.at("missed").get<int>());
   scored.truth = *dir_ / "synth/nowhere";  // not a side of the generator's row

@@ -80,11 +80,26 @@ SideTruthScore ScoreSideAgainstTruth(const std::vector<CameraView>& views, const
   s.missed = s.visible - s.found;
   std::set<int> voted;
   for (const auto& [neg_votes, k, apple] : pairs) voted.insert(apple);
-  for (const int apple : visible)
+  std::map<int, int> views_seen;  // apple id -> views whose mask shows it
+  for (const cv::Mat& mask : truth_masks) {
+    std::set<int> here;
+    for (int y = 0; y < mask.rows; ++y) {
+      const uint16_t* row = mask.ptr<uint16_t>(y);
+      for (int x = 0; x < mask.cols; ++x)
+        if (row[x] > 0) here.insert(row[x] - 1);
+    }
+    for (const int apple : here) ++views_seen[apple];
+  }
+  for (const int apple : visible) {
+    const auto it = views_seen.find(apple);
+    const int bin = std::min(it == views_seen.end() ? 0 : it->second, SideTruthScore::kFramesSeenBins - 1);
+    ++s.visible_by_views_seen[bin];
     if (!found.count(apple)) {
       s.missed_ids.push_back(apple);
+      ++s.missed_by_views_seen[bin];
       if (!voted.count(apple)) ++s.missed_without_points;
     }
+  }
   for (size_t k = 0; k < kept.size(); ++k) {
     const int left = result.clusters[kept[k]].count - credited[k];
     if (left <= 0) continue;

@@ -43,6 +43,15 @@ struct SideTruthScore {
   int over_counted = 0;  // counts above the apples credited, of clusters credited with some
   int not_visible = 0;   // counts of clusters on no visible apple (next row, fallen, chance pairings)
   // count - visible = duplicates + over_counted + not_visible - missed.
+  // The visible apples and the missed ones by the number of the side's views
+  // whose truth mask shows them (index n: n views, the last index: that many
+  // or more; 0: in none of these views, only in frames left out). A fruit
+  // point needs support in several views (FruitPointOptions::min_support), so
+  // apples glimpsed in one or two are beyond the 3D stage: this tells that
+  // limit from the misses it could avoid.
+  static constexpr int kFramesSeenBins = 11;
+  std::vector<int> visible_by_views_seen = std::vector<int>(kFramesSeenBins, 0);
+  std::vector<int> missed_by_views_seen = std::vector<int>(kFramesSeenBins, 0);
 };
 
 // Credits each kept cluster of `result` with up to its count of visible
@@ -50,7 +59,8 @@ struct SideTruthScore {
 // votes for the truth mask's apple there; (cluster, apple) pairs are taken in
 // order of votes, each apple once, each cluster up to its count. `views[i]`
 // and `truth_masks[i]` are the same frame (16-bit, apple id + 1, 0 elsewhere:
-// the generator's masks); `visible` holds the 0-based ids to find.
+// the generator's masks, which leave out an apple's pieces too small to
+// annotate); `visible` holds the 0-based ids to find.
 SideTruthScore ScoreSideAgainstTruth(const std::vector<CameraView>& views, const std::vector<cv::Mat>& truth_masks,
                                      const std::set<int>& visible, const ClusterResult& result,
                                      const TruthScoreOptions& options = {});

@@ -84,6 +84,25 @@ TEST(ScoreSideAgainstTruth, SplitsTheCountIntoFoundMissedDuplicatedAndNotVisible
   EXPECT_EQ(s.over_counted, 1);
   EXPECT_EQ(s.not_visible, 1);
   EXPECT_EQ(s.count - s.visible, s.duplicates + s.over_counted + s.not_visible - s.missed);
+  // Every apple is in all five views; the last bin holds 10 or more.
+  std::vector<int> by_views(SideTruthScore::kFramesSeenBins, 0);
+  by_views[5] = 4;
+  EXPECT_EQ(s.visible_by_views_seen, by_views);
+  by_views[5] = 1;
+  EXPECT_EQ(s.missed_by_views_seen, by_views);
+  // Apple 2 glimpsed in two views only (hidden in the others), apple 3 in none
+  // of them (seen in a frame left out).
+  std::vector<cv::Mat> glimpsed;
+  for (size_t f = 0; f < masks.size(); ++f) {
+    cv::Mat1w m = masks[f].clone();
+    for (uint16_t& id : m)
+      if (id == 4 || (id == 3 && f >= 2)) id = 0;
+    glimpsed.push_back(m);
+  }
+  const SideTruthScore g = ScoreSideAgainstTruth(views, glimpsed, visible, r);
+  EXPECT_EQ(g.visible_by_views_seen, (std::vector<int>{1, 0, 1, 0, 0, 2, 0, 0, 0, 0, 0}));
+  // Apple 3's points now land on no apple of the masks: missed too.
+  EXPECT_EQ(g.missed_by_views_seen, (std::vector<int>{1, 0, 1, 0, 0, 0, 0, 0, 0, 0, 0}));
   // Two touching apples in one cluster counted 2 are both found.
   ClusterResult touching;
   AddCluster(&touching, 2, {apples[0], apples[1]});
