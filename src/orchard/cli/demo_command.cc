@@ -59,6 +59,7 @@ void AddDemoCommand(CLI::App& app) {
         inputs->ground = ParseGroundPlane((dir / "scene.json").string());
       }
       SetUpFruit(a->fruit, (dir / "masks").string(), &tools, inputs);
+      inputs->truth = dir;  // each side scored against the generator's apples (side.json, report)
     }
     YieldOptions options;
     options.side.colmap.camera_model = "PINHOLE";  // the generator's camera has no distortion

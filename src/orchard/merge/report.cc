@@ -30,6 +30,55 @@ std::string Percent(double estimate, double truth) {
   return truth > 0 ? Num(100.0 * estimate / truth) + "%" : "-";
 }
 
+// Each side's count against the generator's truth (sides.<side>.truth, when
+// the sides were scored): the apples found and missed, and the rest of the
+// count; empty when neither side was scored.
+std::string SideTruthTable(const nlohmann::json& y) {
+  if (!y.contains("sides")) return "";
+  std::vector<std::pair<std::string, const nlohmann::json*>> sides;
+  for (const char* side : {"front", "back"})
+    if (y.at("sides").contains(side) && y.at("sides").at(side).contains("truth"))
+      sides.emplace_back(side, &y.at("sides").at(side).at("truth"));
+  if (sides.empty()) return "";
+  std::ostringstream h;
+  h << "<h2>Where each side's count comes from</h2>\n<p>Against the generator's truth: every kept cluster credited "
+       "with the visible apples its fruit points land on, up to its count. Apples seen in one or two frames cannot be "
+       "placed by any multi-view rule.</p>\n<table><tr><th></th>";
+  for (const auto& [name, t] : sides) h << "<th>" << name << "</th>";
+  h << "</tr>\n";
+  // The apples seen in at most two views, of a by-views histogram.
+  const auto glimpsed = [](const nlohmann::json& t, const char* key) {
+    if (!t.contains(key)) return std::string("-");
+    const auto bins = t.at(key).get<std::vector<int>>();
+    int n = 0;
+    for (size_t i = 0; i < bins.size() && i <= 2; ++i) n += bins[i];
+    return std::to_string(n);
+  };
+  const auto row = [&](const std::string& label, const auto& cell) {
+    h << "<tr><td>" << Escape(label) << "</td>";
+    for (const auto& [name, t] : sides) h << "<td>" << cell(*t) << "</td>";
+    h << "</tr>\n";
+  };
+  const auto number = [](const char* key) {
+    return [key](const nlohmann::json& t) { return std::to_string(t.value(key, 0)); };
+  };
+  row("apples visible from the side", number("visible"));
+  row("counted", [](const nlohmann::json& t) {
+    const int visible = t.value("visible", 0), count = t.value("count", 0);
+    return std::to_string(count) + (visible > 0 ? " (" + Num(100.0 * (count - visible) / visible) + "%)" : "");
+  });
+  row("visible apples found", number("found"));
+  row("visible apples missed", number("missed"));
+  row("... of them seen in at most two frames", [&](const nlohmann::json& t) {
+    return glimpsed(t, "missed_by_views_seen") + " of " + glimpsed(t, "visible_by_views_seen");
+  });
+  row("counted twice (a cluster on an apple another holds)", number("duplicates"));
+  row("counted above the apples a cluster holds", number("over_counted"));
+  row("on no visible apple (next row, fallen, chance)", number("not_visible"));
+  h << "</table>\n";
+  return h.str();
+}
+
 // Apples along the row (x) and by height (y), and the per-metre bars below.
 std::string MapSvg(const nlohmann::json& y, const std::vector<MapCluster>& clusters) {
   double x0 = 0, x1 = 1, h1 = 3;
@@ -123,6 +172,7 @@ std::string YieldReportHtml(const nlohmann::json& y, const std::vector<MapCluste
     row("truth: visible from both sides", t.value("visible_both", 0.0));
   }
   h << "</table>\n";
+  h << SideTruthTable(y);
   for (const auto& w : y.at("warnings")) h << "<p class='warn'>Warning: " << Escape(w.get<std::string>()) << "</p>\n";
   if (y.contains("sides")) {  // where each side's camera poses came from
     std::string poses;

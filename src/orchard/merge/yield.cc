@@ -40,15 +40,22 @@ double IntersectionDistance(const YieldOptions& o, const Registration& registrat
 
 namespace {
 
-Json SideJson(const SideSummary& s, const SideCloud& cloud) {
-  return {{"count", s.one_side_count},
-          {"merge_clusters_count", s.count},
-          {"single_frame_sum", s.single_frame_sum},
-          {"frames_used", s.frames_used},
-          {"poses", s.poses},
-          {"clusters_kept", s.clusters_kept},
-          {"clusters_removed", s.clusters_removed},
-          {"clusters_loaded", cloud.clusters.size()}};
+Json SideJson(const SideSummary& s, const SideCloud& cloud, const SideInputs& in) {
+  Json j = {{"count", s.one_side_count},
+            {"merge_clusters_count", s.count},
+            {"single_frame_sum", s.single_frame_sum},
+            {"frames_used", s.frames_used},
+            {"poses", s.poses},
+            {"clusters_kept", s.clusters_kept},
+            {"clusters_removed", s.clusters_removed},
+            {"clusters_loaded", cloud.clusters.size()}};
+  // A side scored against the generator's truth: where its count comes from
+  // (side.json "truth"), so the report can show it beside the counts.
+  if (!in.truth.empty()) {
+    const Json side = Json::parse(ReadTextFile(in.out / "side.json"), nullptr, false);
+    if (!side.is_discarded() && side.contains("truth")) j["truth"] = side.at("truth");
+  }
+  return j;
 }
 
 Json AlignmentJson(const Registration& r, const std::string& method) {
@@ -351,7 +358,7 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
       {"per_metre", per_metre},
       {"bin_length_m", o.bin_length},
       {"alignment", AlignmentJson(y.registration, method)},
-      {"sides", {{"front", SideJson(y.front_side, front_cloud)}, {"back", SideJson(y.back_side, back_cloud)}}},
+      {"sides", {{"front", SideJson(y.front_side, front_cloud, front)}, {"back", SideJson(y.back_side, back_cloud, back)}}},
       {"warnings", warnings},
       {"version", ORCHARD_VERSION},
   };

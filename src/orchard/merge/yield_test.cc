@@ -102,6 +102,7 @@ TEST_F(YieldTest, MergesBothSidesAndResumes) {
   EXPECT_NE(ReadTextFile(*dir_ / "out/report.html").find("<svg"), std::string::npos);
   EXPECT_EQ(j.at("sides").at("back").at("poses").get<std::string>().rfind("given (", 0), 0u);
   EXPECT_NE(ReadTextFile(*dir_ / "out/report.html").find("Poses: front: given ("), std::string::npos);
+  EXPECT_EQ(ReadTextFile(*dir_ / "out/report.html").find("Where each side"), std::string::npos);  // not scored
 
   // Interrupted during the back side: its results and part of its cache are
   // gone, the front side's cache is complete.
@@ -112,12 +113,24 @@ TEST_F(YieldTest, MergesBothSidesAndResumes) {
   int removed = 0;
   for (const auto& e : fs::directory_iterator(*dir_ / "out/back/detections"))
     if (removed < 6 && e.path().extension() == ".json") fs::remove(e.path()), ++removed;
-  const YieldSummary again = RunYield(Inputs("row", "row", "out"), o);
+  // This time each side is scored against the generator's truth too.
+  YieldInputs scored = Inputs("row", "row", "out");
+  scored.front.truth = *dir_ / "row/front", scored.back.truth = *dir_ / "row/back";
+  const YieldSummary again = RunYield(scored, o);
   EXPECT_EQ(again.total, y.total);
   EXPECT_EQ(again.front, y.front);
   EXPECT_EQ(again.back, y.back);
   EXPECT_EQ(fs::last_write_time(front_cache), front_time);  // not redone
   EXPECT_TRUE(fs::exists(*dir_ / "out/yield.json"));
+  // ... and yield.json and the report say where each side's count comes from.
+  const auto js = nlohmann::json::parse(ReadTextFile(*dir_ / "out/yield.json"));
+  EXPECT_EQ(js.at("sides").at("front").at("truth").at("visible").get<int>(), visible_front);
+  EXPECT_EQ(js.at("sides").at("back").at("truth").at("count").get<int>(), y.back);
+  const std::string report = ReadTextFile(*dir_ / "out/report.html");
+  EXPECT_NE(report.find("Where each side's count comes from"), std::string::npos);
+  EXPECT_NE(report.find("<td>apples visible from the side</td><td>" + std::to_string(visible_front) + "</td><td>" +
+                        std::to_string(visible_back) + "</td>"),
+            std::string::npos);
 
   // Calibrated on its own harvest, the row's total becomes the harvested
   // count; a calibration of another detector is refused before the run and
