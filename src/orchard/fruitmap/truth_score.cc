@@ -92,7 +92,7 @@ SideTruthScore ScoreSideAgainstTruth(const std::vector<CameraView>& views, const
   }
   for (const int apple : visible) {
     const auto it = views_seen.find(apple);
-    const int bin = std::min(it == views_seen.end() ? 0 : it->second, SideTruthScore::kFramesSeenBins - 1);
+    const int bin = std::min(it == views_seen.end() ? 0 : it->second, SideTruthScore::kViewsSeenBins - 1);
     ++s.visible_by_views_seen[bin];
     if (!found.count(apple)) {
       s.missed_ids.push_back(apple);

@@ -49,9 +49,9 @@ struct SideTruthScore {
   // point needs support in several views (FruitPointOptions::min_support), so
   // apples glimpsed in one or two are beyond the 3D stage: this tells that
   // limit from the misses it could avoid.
-  static constexpr int kFramesSeenBins = 11;
-  std::vector<int> visible_by_views_seen = std::vector<int>(kFramesSeenBins, 0);
-  std::vector<int> missed_by_views_seen = std::vector<int>(kFramesSeenBins, 0);
+  static constexpr int kViewsSeenBins = 11;
+  std::vector<int> visible_by_views_seen = std::vector<int>(kViewsSeenBins, 0);
+  std::vector<int> missed_by_views_seen = std::vector<int>(kViewsSeenBins, 0);
 };
 
 // Credits each kept cluster of `result` with up to its count of visible

@@ -85,7 +85,7 @@ TEST(ScoreSideAgainstTruth, SplitsTheCountIntoFoundMissedDuplicatedAndNotVisible
   EXPECT_EQ(s.not_visible, 1);
   EXPECT_EQ(s.count - s.visible, s.duplicates + s.over_counted + s.not_visible - s.missed);
   // Every apple is in all five views; the last bin holds 10 or more.
-  std::vector<int> by_views(SideTruthScore::kFramesSeenBins, 0);
+  std::vector<int> by_views(SideTruthScore::kViewsSeenBins, 0);
   by_views[5] = 4;
   EXPECT_EQ(s.visible_by_views_seen, by_views);
   by_views[5] = 1;
