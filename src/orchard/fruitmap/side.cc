@@ -716,9 +716,38 @@ std::set<int> TruthVisibleApples(const fs::path& dir) {
   return ReadVisibleApples(dir.parent_path() / "apples.csv", dir.filename().string());
 }
 
+// Each scored cluster's part in the breakdown, one row per kept cluster of
+// `result`: for a duplicate, the cluster that holds its apple and how far
+// apart the two lie (where the next rule against duplicates has to look).
+void WriteTruthClusters(const fs::path& path, const ClusterResult& result, const SideTruthScore& t) {
+  std::map<int, const FruitCluster*> holder;  // apple -> the cluster credited with it
+  for (const ClusterTruth& c : t.clusters)
+    for (const int apple : c.credited) holder[apple] = &result.clusters[c.cluster];
+  std::ostringstream csv;
+  csv << "id,x,y,z,count,role,credited,top_apple,top_votes,holder,holder_distance\n";
+  csv.precision(4);
+  csv << std::fixed;
+  for (const ClusterTruth& c : t.clusters) {
+    const FruitCluster& cluster = result.clusters[c.cluster];
+    csv << cluster.id << ',' << cluster.centre.x() << ',' << cluster.centre.y() << ',' << cluster.centre.z() << ','
+        << cluster.count << ',' << c.role << ',';
+    for (size_t i = 0; i < c.credited.size(); ++i) csv << (i ? ";" : "") << c.credited[i];
+    csv << ',' << c.top_apple << ',' << c.top_votes << ',';
+    const auto h = c.role == "duplicate" ? holder.find(c.top_apple) : holder.end();
+    if (h != holder.end())
+      csv << h->second->id << ',' << (h->second->centre - cluster.centre).norm();
+    else
+      csv << ',';
+    csv << '\n';
+  }
+  WriteTextFileAtomic(path, csv.str());
+}
+
 // The side's kept clusters scored against the generator's truth in `truth`
-// (S/front or S/back), for side.json; logged in one line.
-Json ScoreAgainstTruth(const fs::path& truth, const std::vector<CameraView>& views, const ClusterResult& result) {
+// (S/front or S/back), for side.json (logged in one line) and
+// OUT/truth_clusters.csv.
+Json ScoreAgainstTruth(const fs::path& truth, const std::vector<CameraView>& views, const ClusterResult& result,
+                       const fs::path& out) {
   const fs::path dir = TruthFolder(truth);
   const std::set<int> visible = TruthVisibleApples(dir);
   MaskFinder finder(dir / "masks");
@@ -729,6 +758,7 @@ Json ScoreAgainstTruth(const fs::path& truth, const std::vector<CameraView>& vie
     masks.push_back(ReadImage(path, cv::IMREAD_UNCHANGED));
   }
   const SideTruthScore t = ScoreSideAgainstTruth(views, masks, visible, result);
+  WriteTruthClusters(out / "truth_clusters.csv", result, t);
   const int glimpsed = t.visible_by_views_seen[0] + t.visible_by_views_seen[1] + t.visible_by_views_seen[2];
   const int glimpsed_missed = t.missed_by_views_seen[0] + t.missed_by_views_seen[1] + t.missed_by_views_seen[2];
   spdlog::info("truth: {} counted for {} visible ({:+.1f}%): {} found, {} missed ({} of the {} seen in at most two "
@@ -942,7 +972,8 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
     s.one_side_count = one_side_result->count;
   }
   Json truth_json;
-  if (!in.truth.empty()) truth_json = ScoreAgainstTruth(in.truth, views, one_side_result ? *one_side_result : r);
+  if (!in.truth.empty())
+    truth_json = ScoreAgainstTruth(in.truth, views, one_side_result ? *one_side_result : r, in.out);
   s.clusters_s = stopwatch.Lap();
   WriteOutputs(in.out, image_paths, frames, r, o);
   s.outputs_s = stopwatch.Lap();

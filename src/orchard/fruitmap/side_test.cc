@@ -3,6 +3,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <numeric>
+#include <sstream>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -89,6 +90,22 @@ TEST_F(SideTest, CountsTheVisibleApplesOnceFromTruePosesAndMasks) {
   EXPECT_EQ(std::accumulate(by_visible.begin(), by_visible.end(), 0), visible);
   EXPECT_EQ(std::accumulate(by_missed.begin(), by_missed.end(), 0), t.at("missed").get<int>());
   EXPECT_EQ(by_visible[0], 0);  // every frame is a view: a visible apple shows in one at least
+  // Each kept cluster's part, one row each, duplicates with the cluster holding their apple.
+  std::vector<std::string> rows;
+  std::istringstream csv(ReadTextFile(*dir_ / "out/truth_clusters.csv"));
+  for (std::string line; std::getline(csv, line);) rows.push_back(line);
+  ASSERT_FALSE(rows.empty());
+  EXPECT_EQ(rows[0], "id,x,y,z,count,role,credited,top_apple,top_votes,holder,holder_distance");
+  int found_rows = 0, duplicate_rows = 0;
+  for (size_t i = 1; i < rows.size(); ++i) {
+    found_rows += rows[i].find(",found,") != std::string::npos;
+    if (rows[i].find(",duplicate,") != std::string::npos) {
+      ++duplicate_rows;
+      EXPECT_NE(rows[i].back(), ',') << rows[i];  // a holder and its distance
+    }
+  }
+  EXPECT_GT(found_rows, 0.8 * visible - 5);
+  EXPECT_LE(duplicate_rows, t.at("duplicates").get<int>());
   EXPECT_EQ(s.count - visible, t.at("duplicates").get<int>() + t.at("over_counted").get<int>() +
                                    t.at("not_visible").get<int>() - t.at("missed").get<int>());
   scored.truth = *dir_ / "synth/nowhere";  // not a side of the generator's row

@@ -70,11 +70,13 @@ SideTruthScore ScoreSideAgainstTruth(const std::vector<CameraView>& views, const
       if (n >= o.min_votes && visible.count(apple)) pairs.emplace_back(-n, static_cast<int>(k), apple);
   std::sort(pairs.begin(), pairs.end());
   std::vector<int> credited(kept.size(), 0);
+  s.clusters.resize(kept.size());
   std::set<int> found;
   for (const auto& [neg_votes, k, apple] : pairs) {
     if (credited[k] >= result.clusters[kept[k]].count || found.count(apple)) continue;
     found.insert(apple);
     ++credited[k];
+    s.clusters[k].credited.push_back(apple);
   }
   s.found = static_cast<int>(found.size());
   s.missed = s.visible - s.found;
@@ -101,17 +103,17 @@ SideTruthScore ScoreSideAgainstTruth(const std::vector<CameraView>& views, const
     }
   }
   for (size_t k = 0; k < kept.size(); ++k) {
-    const int left = result.clusters[kept[k]].count - credited[k];
-    if (left <= 0) continue;
-    if (credited[k] > 0) {
-      s.over_counted += left;
-      continue;
-    }
-    // Credited with nothing: on a visible apple (which another cluster holds) or not.
-    int top = -1, top_n = 0;
+    ClusterTruth& c = s.clusters[k];
+    c.cluster = kept[k];
+    std::sort(c.credited.begin(), c.credited.end());
     for (const auto& [apple, n] : votes[k])
-      if (n > top_n) top = apple, top_n = n;
-    (top >= 0 && visible.count(top) ? s.duplicates : s.not_visible) += left;
+      if (n > c.top_votes) c.top_apple = apple, c.top_votes = n;
+    const int left = result.clusters[kept[k]].count - credited[k];
+    c.role = left <= 0 ? "found" : credited[k] > 0 ? "over_counted"
+                                 // Credited with nothing: on a visible apple (which another cluster holds) or not.
+                                 : c.top_apple >= 0 && visible.count(c.top_apple) ? "duplicate" : "not_visible";
+    if (left <= 0) continue;
+    (c.role == "over_counted" ? s.over_counted : c.role == "duplicate" ? s.duplicates : s.not_visible) += left;
   }
   return s;
 }

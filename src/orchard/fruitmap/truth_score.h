@@ -8,6 +8,7 @@
 
 #include <filesystem>
 #include <set>
+#include <string>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -28,6 +29,18 @@ struct TruthScoreOptions {
   // least this often (one chance vote is no evidence).
   int min_votes = 2;
   void Check() const;
+};
+
+// One kept cluster against the truth.
+struct ClusterTruth {
+  int cluster = 0;               // index into ClusterResult::clusters
+  std::vector<int> credited;     // 0-based ids of the visible apples it was credited with, ascending
+  int top_apple = -1;            // the apple its points vote for most (-1: none)
+  int top_votes = 0;
+  // "found" (credited with its count), "over_counted" (with some, counted
+  // higher), "duplicate" (with none, on a visible apple another cluster
+  // holds) or "not_visible".
+  std::string role;
 };
 
 struct SideTruthScore {
@@ -52,6 +65,7 @@ struct SideTruthScore {
   static constexpr int kViewsSeenBins = 11;
   std::vector<int> visible_by_views_seen = std::vector<int>(kViewsSeenBins, 0);
   std::vector<int> missed_by_views_seen = std::vector<int>(kViewsSeenBins, 0);
+  std::vector<ClusterTruth> clusters;  // the kept clusters, in order
 };
 
 // Credits each kept cluster of `result` with up to its count of visible

@@ -84,6 +84,20 @@ TEST(ScoreSideAgainstTruth, SplitsTheCountIntoFoundMissedDuplicatedAndNotVisible
   EXPECT_EQ(s.over_counted, 1);
   EXPECT_EQ(s.not_visible, 1);
   EXPECT_EQ(s.count - s.visible, s.duplicates + s.over_counted + s.not_visible - s.missed);
+  // Per kept cluster (the removed one is left out): its role and apples.
+  ASSERT_EQ(s.clusters.size(), 5u);
+  const std::vector<std::string> roles = {"found", "duplicate", "over_counted", "not_visible", "found"};
+  const std::vector<int> cluster_index = {0, 1, 2, 3, 5};
+  for (size_t k = 0; k < 5; ++k) {
+    EXPECT_EQ(s.clusters[k].role, roles[k]) << k;
+    EXPECT_EQ(s.clusters[k].cluster, cluster_index[k]) << k;
+  }
+  EXPECT_EQ(s.clusters[0].credited, std::vector<int>{0});
+  EXPECT_TRUE(s.clusters[1].credited.empty());
+  EXPECT_EQ(s.clusters[1].top_apple, 0);  // the apple the first cluster holds
+  EXPECT_EQ(s.clusters[2].credited, std::vector<int>{1});
+  EXPECT_EQ(s.clusters[3].top_apple, 4);  // the next row's apple
+  EXPECT_EQ(s.clusters[4].credited, std::vector<int>{3});
   // Every apple is in all five views; the last bin holds 10 or more.
   std::vector<int> by_views(SideTruthScore::kViewsSeenBins, 0);
   by_views[5] = 4;
