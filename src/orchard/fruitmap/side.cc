@@ -724,13 +724,14 @@ void WriteTruthClusters(const fs::path& path, const ClusterResult& result, const
   for (const ClusterTruth& c : t.clusters)
     for (const int apple : c.credited) holder[apple] = &result.clusters[c.cluster];
   std::ostringstream csv;
-  csv << "id,x,y,z,count,role,credited,top_apple,top_votes,holder,holder_distance\n";
+  csv << "id,x,y,z,count,points,views,votes_won,role,credited,top_apple,top_votes,holder,holder_distance\n";
   csv.precision(4);
   csv << std::fixed;
   for (const ClusterTruth& c : t.clusters) {
     const FruitCluster& cluster = result.clusters[c.cluster];
     csv << cluster.id << ',' << cluster.centre.x() << ',' << cluster.centre.y() << ',' << cluster.centre.z() << ','
-        << cluster.count << ',' << c.role << ',';
+        << cluster.count << ',' << cluster.points.size() << ',' << cluster.views.size() << ',' << cluster.votes_won
+        << ',' << c.role << ',';
     for (size_t i = 0; i < c.credited.size(); ++i) csv << (i ? ";" : "") << c.credited[i];
     csv << ',' << c.top_apple << ',' << c.top_votes << ',';
     const auto h = c.role == "duplicate" ? holder.find(c.top_apple) : holder.end();

@@ -95,7 +95,7 @@ TEST_F(SideTest, CountsTheVisibleApplesOnceFromTruePosesAndMasks) {
   std::istringstream csv(ReadTextFile(*dir_ / "out/truth_clusters.csv"));
   for (std::string line; std::getline(csv, line);) rows.push_back(line);
   ASSERT_FALSE(rows.empty());
-  EXPECT_EQ(rows[0], "id,x,y,z,count,role,credited,top_apple,top_votes,holder,holder_distance");
+  EXPECT_EQ(rows[0], "id,x,y,z,count,points,views,votes_won,role,credited,top_apple,top_votes,holder,holder_distance");
   int found_rows = 0, duplicate_rows = 0;
   for (size_t i = 1; i < rows.size(); ++i) {
     found_rows += rows[i].find(",found,") != std::string::npos;
