@@ -104,12 +104,13 @@ std::string MapSvg(const nlohmann::json& y, const std::vector<MapCluster>& clust
       << c.side << ": " << c.count << " apple(s)" << (c.shared > 0 ? ", " + Num(c.shared) + " seen from both sides" : "")
       << "</title></circle>\n";
   }
-  // Per-metre bars.
+  // Per-metre bars: calibrated apples when the run was calibrated, else those seen.
+  const char* bar_key = y.contains("calibrated") ? "calibrated" : "count";
   double most = 1;
-  for (const auto& b : y.at("per_metre")) most = std::max(most, b.at("count").get<double>());
+  for (const auto& b : y.at("per_metre")) most = std::max(most, b.value(bar_key, 0.0));
   const double base = map_h + bar_h;
   for (const auto& b : y.at("per_metre")) {
-    const double from = b.at("from").get<double>(), to = b.at("to").get<double>(), n = b.at("count").get<double>();
+    const double from = b.at("from").get<double>(), to = b.at("to").get<double>(), n = b.value(bar_key, 0.0);
     const double h = (bar_h - 20) * n / most;
     s << "<rect x='" << Num(pad + (from - x0) * sx + 1) << "' y='" << Num(base - h) << "' width='"
       << Num(std::max((to - from) * sx - 2, 1.0)) << "' height='" << Num(h) << "' fill='#c84'/>\n";
@@ -120,7 +121,8 @@ std::string MapSvg(const nlohmann::json& y, const std::vector<MapCluster>& clust
   }
   s << "<text x='" << pad << "' y='14' font-size='12'>apples along the row (front side's frame): "
        "<tspan fill='#2a7'>front</tspan>, <tspan fill='#27c'>back</tspan>, <tspan fill='#d22'>seen from both sides</tspan>; "
-       "bars: apples per bin</text>\n";
+       "bars: "
+    << (y.contains("calibrated") ? "calibrated apples" : "apples") << " per bin</text>\n";
   s << "</svg>\n";
   return s.str();
 }

@@ -324,9 +324,14 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
     std::vector<double> sum(bins, 0);
     for (const auto& m : map)
       sum[std::min(bins - 1, static_cast<int>((m.along - x0) / o.bin_length))] += m.count - 0.5 * m.shared;
-    for (int b = 0; b < bins; ++b)
+    for (int b = 0; b < bins; ++b) {
       per_metre.push_back({{"from", x0 + b * o.bin_length}, {"to", x0 + (b + 1) * o.bin_length},
                            {"count", std::round(sum[b] * 10) / 10}});
+      // The calibration corrects for apples hidden from both sides, which
+      // hang where the seen ones do (as far as the harvested rows tell), so
+      // it scales each bin as it scales the total.
+      if (!in.calibration.empty()) per_metre.back()["calibrated"] = std::round(sum[b] * calibration.factor * 10) / 10;
+    }
   }
 
   Json warnings = Json::array();

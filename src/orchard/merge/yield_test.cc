@@ -146,7 +146,19 @@ TEST_F(YieldTest, MergesBothSidesAndResumes) {
   const auto jc = nlohmann::json::parse(ReadTextFile(*dir_ / "out/yield.json"));
   EXPECT_EQ(jc.at("calibrated").at("total").get<int>(), calibrated.calibrated_total);
   EXPECT_NEAR(jc.at("truth").at("calibrated_percent_of_harvested").get<double>(), 100.0, 0.5);
-  EXPECT_NE(ReadTextFile(*dir_ / "out/report.html").find("calibrated on 1 harvested row (x"), std::string::npos);
+  // The per-metre map is calibrated bin by bin, so the bins add up to the calibrated total.
+  double calibrated_bins = 0, seen_bins = 0;
+  for (const auto& b : jc.at("per_metre")) {
+    calibrated_bins += b.at("calibrated").get<double>();
+    seen_bins += b.at("count").get<double>();
+    EXPECT_NEAR(b.at("calibrated").get<double>(), b.at("count").get<double>() * calibration.factor, 0.15);
+  }
+  EXPECT_NEAR(calibrated_bins, seen_bins * calibration.factor, 0.1 * jc.at("per_metre").size());
+  EXPECT_NEAR(calibrated_bins, calibrated.calibrated_total, 1.0 + 0.1 * jc.at("per_metre").size());
+  const std::string calibrated_report = ReadTextFile(*dir_ / "out/report.html");
+  EXPECT_NE(calibrated_report.find("calibrated on 1 harvested row (x"), std::string::npos);
+  EXPECT_NE(calibrated_report.find("bars: calibrated apples per bin"), std::string::npos);
+  EXPECT_EQ(report.find("bars: calibrated apples per bin"), std::string::npos);
   calibration.detector = "unet:models/unet.pt@0123";
   WriteTextFileAtomic(*dir_ / "other.json", CalibrationJson(calibration));
   in.calibration = *dir_ / "other.json";
