@@ -28,7 +28,7 @@ void AddSideCommand(CLI::App& app) {
   cmd->add_option("--masks", a->masks, "Instance masks (16-bit, one id per apple) named like the frames");
   cmd->add_option("--truth", a->truth,
                   "The generator's folder of this side (S/front or S/back): score the clusters against its apples "
-                  "(found, missed, counted twice; side.json \"truth\")");
+                  "(found, missed, counted twice; side.json \"truth\", and each cluster's role in truth_clusters.csv)");
   AddFruitOptions(cmd, &a->fruit);
   AddSideOptions(cmd, &a->options);
   cmd->callback([a]() {

@@ -35,7 +35,9 @@ void AddYieldCommand(CLI::App& app) {
   cmd->add_option("--masks-back", a->masks_back, "Back instance masks (with --detector masks)");
   cmd->add_flag("--poses-registered", o.poses_registered,
                 "The given poses of both sides are in one frame (RTK-GNSS, one SLAM run): skip the registration");
-  cmd->add_option("--truth", a->truth, "Ground truth json (the generator's truth.json) to compare against");
+  cmd->add_option("--truth", a->truth,
+                  "Ground truth json (the generator's truth.json) to compare against; with the generator's side "
+                  "folders beside it each side is scored too (yield.json sides.<side>.truth, OUT/<side>/truth_clusters.csv)");
   cmd->add_option("--calibration", a->calibration,
                   "Calibration from harvested rows (orchard calibrate): also report the calibrated total");
   cmd->add_option("--match-distance", o.registration.match_distance,
