@@ -5,7 +5,6 @@
 // batch 32, on synthetic 96x96 patches (the cost does not depend on content).
 //
 //   bench_counter_step [steps=20] [batch=32] [input=96] [width=16] [density=1]
-#include <chrono>
 #include <cstdio>
 #include <random>
 #include <string>
@@ -16,16 +15,9 @@
 #include <opencv2/imgproc.hpp>
 #include <torch/torch.h>
 
+#include "orchard/core/stopwatch.h"
 #include "orchard/nn/models.h"
 #include "orchard/nn/patch_input.h"
-
-namespace {
-
-double Seconds(std::chrono::steady_clock::time_point since) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
   const int steps = argc > 1 ? std::stoi(argv[1]) : 20;
@@ -63,7 +55,7 @@ int main(int argc, char** argv) {
 
   double prepare_s = 0, network_s = 0;
   for (int step = -2; step < steps; ++step) {  // two warm-up steps, not timed
-    auto t0 = std::chrono::steady_clock::now();
+    orchard::Stopwatch stopwatch;
     std::vector<cv::Mat> images;
     std::vector<int64_t> labels;
     for (int i = 0; i < batch; ++i) {
@@ -72,8 +64,7 @@ int main(int argc, char** argv) {
       labels.push_back(static_cast<int64_t>(1 + k % 3));
     }
     const torch::Tensor x = orchard::nn::ImagesToTensor(images), y = torch::tensor(labels, torch::kLong);
-    const double prepare = Seconds(t0);
-    t0 = std::chrono::steady_clock::now();
+    const double prepare = stopwatch.Lap();
     adam.zero_grad();
     torch::Tensor loss;
     if (density) {
@@ -84,7 +75,7 @@ int main(int argc, char** argv) {
     }
     loss.backward();
     adam.step();
-    const double network = Seconds(t0);
+    const double network = stopwatch.Lap();
     if (step >= 0) prepare_s += prepare, network_s += network;
   }
   std::printf("counter training step (ResNet-18 width %d, input %d, %s, batch %d, %d threads, %d steps)\n", width,

@@ -105,7 +105,8 @@ std::string MapSvg(const nlohmann::json& y, const std::vector<MapCluster>& clust
       << "</title></circle>\n";
   }
   // Per-metre bars: calibrated apples when the run was calibrated, else those seen.
-  const char* bar_key = y.contains("calibrated") ? "calibrated" : "count";
+  const bool calibrated = y.contains("calibrated");
+  const char* bar_key = calibrated ? "calibrated" : "count";
   double most = 1;
   for (const auto& b : y.at("per_metre")) most = std::max(most, b.value(bar_key, 0.0));
   const double base = map_h + bar_h;
@@ -122,7 +123,7 @@ std::string MapSvg(const nlohmann::json& y, const std::vector<MapCluster>& clust
   s << "<text x='" << pad << "' y='14' font-size='12'>apples along the row (front side's frame): "
        "<tspan fill='#2a7'>front</tspan>, <tspan fill='#27c'>back</tspan>, <tspan fill='#d22'>seen from both sides</tspan>; "
        "bars: "
-    << (y.contains("calibrated") ? "calibrated apples" : "apples") << " per bin</text>\n";
+    << (calibrated ? "calibrated apples" : "apples") << " per bin</text>\n";
   s << "</svg>\n";
   return s.str();
 }
