@@ -98,7 +98,7 @@ void AddSideOptions(CLI::App* cmd, SideOptions* options) {
     best_views[BestViewsName(b)] = b;
   cmd->add_option("--best-views-by", o.clusters.best_views_by,
                    "Count a cluster in its views with the most fruit pixels (the study's rule) or the highest counts; "
-                   "auto (default): counts for instance masks counted one per blob, else pixels")
+                   "auto (default): counts when blobs are counted one apple each (instance masks, boxes), else pixels")
       ->transform(CLI::CheckedTransformer(best_views, CLI::ignore_case));
   cmd->add_flag("--vote-near-first,!--vote-under-first", o.clusters.vote_near_first,
                 "A point votes for the blob whose centre is near before the blob under it (default), or the reverse");
@@ -121,17 +121,20 @@ void AddSideOptions(CLI::App* cmd, SideOptions* options) {
 }
 
 void AddFruitOptions(CLI::App* cmd, FruitArgs* a) {
-  cmd->add_option("--detector", a->detector, "Fruit: gmm, unet, or masks (the generator's instance masks)")
+  cmd->add_option("--detector", a->detector,
+                  "Fruit: gmm, unet, retinanet (one blob per box), or masks (the generator's instance masks)")
       ->capture_default_str();
   cmd->add_option("--model", a->model, "Detector model (default: the shipped model of the detector)");
   cmd->add_option("--counter", a->counter,
-                  "Apples per blob: cnn, gmm, blob (one each), or auto (blob for --detector masks, else cnn)")
+                  "Apples per blob: cnn, gmm, blob (one each), or auto (blob for --detector masks and retinanet, else cnn)")
       ->capture_default_str();
   cmd->add_option("--counter-model", a->counter_model, "Counter model (default: the shipped one)");
   cmd->add_option("--threads", a->threads, "Detector and counter threads (0 = all cores)")->capture_default_str();
   cmd->add_option("--min-blob-pixels", a->min_blob_pixels, "Detector blobs smaller than this (pixels) are dropped")
       ->capture_default_str();
   cmd->add_option("--unet-threshold", a->unet_threshold, "A pixel is apple above this U-Net probability")
+      ->capture_default_str();
+  cmd->add_option("--retinanet-threshold", a->retinanet_threshold, "A RetinaNet box is an apple above this score")
       ->capture_default_str();
   cmd->add_option("--min-apple-posterior", a->gmm_min_apple_posterior,
                   "gmm: a superpixel is apple when the KL rule says so and its apple posterior is at least this")
@@ -144,7 +147,8 @@ void AddFruitOptions(CLI::App* cmd, FruitArgs* a) {
 
 std::string CounterName(const FruitArgs& args) {
   if (args.counter != "auto") return args.counter;
-  return args.detector == "masks" ? "blob" : "cnn";
+  // A box detector finds apples, not clusters: one apple per box.
+  return args.detector == "masks" || args.detector == "retinanet" ? "blob" : "cnn";
 }
 
 void SetUpFruit(FruitArgs a, const std::string& masks, FruitTools* tools, SideInputs* in) {
@@ -161,6 +165,7 @@ void SetUpFruit(FruitArgs a, const std::string& masks, FruitTools* tools, SideIn
       choice.threads = a.threads;
       choice.blobs.min_pixels = a.min_blob_pixels;
       choice.unet_threshold = a.unet_threshold;
+      choice.retinanet_threshold = a.retinanet_threshold;
       choice.gmm_min_apple_posterior = a.gmm_min_apple_posterior;
       tools->detector = MakeDetector(choice);
     }
@@ -173,6 +178,8 @@ void SetUpFruit(FruitArgs a, const std::string& masks, FruitTools* tools, SideIn
       in->detector_name += " min_blob_pixels=" + std::to_string(a.min_blob_pixels);
     if (a.detector == "unet" && a.unet_threshold != DetectorChoice().unet_threshold)
       in->detector_name += " threshold=" + std::to_string(a.unet_threshold);
+    if (a.detector == "retinanet" && a.retinanet_threshold != DetectorChoice().retinanet_threshold)
+      in->detector_name += " threshold=" + std::to_string(a.retinanet_threshold);
     if (a.detector == "gmm" && a.gmm_min_apple_posterior != FruitArgs().gmm_min_apple_posterior)
       in->detector_name += " min_apple_posterior=" + std::to_string(a.gmm_min_apple_posterior);
   }

@@ -1,5 +1,5 @@
-// `orchard train counter` and `orchard train unet`: the study's two networks,
-// trained from scratch on CPU; and `orchard patches`, real counting patches cut
+// `orchard train counter`, `orchard train unet` and `orchard train retinanet`:
+// the study's networks, trained from scratch on CPU; and `orchard patches`, real counting patches cut
 // from box annotations.
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
@@ -11,6 +11,7 @@
 #include "orchard/data/dataset.h"
 #include "orchard/nn/counter_ensemble.h"
 #include "orchard/nn/counter_training.h"
+#include "orchard/nn/detection_training.h"
 #include "orchard/nn/segmentation_training.h"
 
 namespace orchard {
@@ -168,6 +169,69 @@ void AddTrainNetworkCommands(CLI::App& app) {
     const nn::UNetTrainingResult result = nn::TrainUNet(samples, u->options, Describe(u->data, {}, u->subset), u->out);
     spdlog::info("wrote {}: {} training / {} validation tiles, best val apple IoU {:.4f} at epoch {} of {} ({:.0f} s)",
                  u->out, result.train_tiles, result.validation_tiles, result.record.best_metric,
+                 result.record.best_epoch, result.record.epochs_run, result.record.seconds);
+  });
+
+  // ---- retinanet ----
+  CLI::App* retina = train->add_subcommand(
+      "retinanet", "RetinaNet-style box detector (feature pyramid, focal loss) from datasets with boxes or masks");
+  struct RetinaArgs {
+    std::vector<std::string> data;
+    std::string out, state;
+    SubsetArgs subset;
+    nn::RetinaNetTrainingOptions options;
+  };
+  auto r = std::make_shared<RetinaArgs>();
+  r->options.trainer.batch_size = 8;
+  r->options.trainer.samples_per_epoch = 400;
+  r->options.trainer.patience = 6;
+  retina->add_option("--data", r->data,
+                     "Dataset: YOLO/COCO (boxes) or MinneApple folder / synthetic side (each instance's box); "
+                     "repeatable")
+      ->required();
+  retina->add_option("--out", r->out, "Model file to write (.pt)")->required();
+  r->subset.AddOptions(retina, "train");
+  retina->add_option("--depth", r->options.architecture.depth, "ResNet backbone depth: 18, 34 or 50")
+      ->capture_default_str();
+  retina->add_option("--width", r->options.architecture.base_width, "Backbone's first-stage channels (paper: 64)")
+      ->capture_default_str();
+  retina->add_option("--fpn-channels", r->options.architecture.fpn_channels, "Pyramid and subnet channels (paper: 256)")
+      ->capture_default_str();
+  retina->add_option("--head-convs", r->options.architecture.head_convs, "Convolutions per subnet (paper: 4)")
+      ->capture_default_str();
+  retina->add_option("--anchor-sizes", r->options.architecture.anchor_sizes,
+                     "Anchor side in pixels at P3, P4, P5 (paper: 32 64 128)")
+      ->expected(3)
+      ->capture_default_str();
+  retina->add_option("--tile", r->options.tile, "Training tile side, a multiple of 32")->capture_default_str();
+  retina->add_option("--min-scale", r->options.min_scale, "Smallest random scale of a drawn image")
+      ->capture_default_str();
+  retina->add_option("--max-scale", r->options.max_scale, "Largest random scale of a drawn image")
+      ->capture_default_str();
+  retina->add_option("--lr", r->options.learning_rate, "Adam learning rate")->capture_default_str();
+  retina->add_option("--val-fraction", r->options.validation_fraction,
+                     "Fraction of training photos for validation (0: all train, the last epoch is kept)")
+      ->capture_default_str();
+  AddTrainerOptions(retina, &r->options.trainer, &r->state);
+  retina->callback([r]() {
+    r->options.trainer.state_dir = r->state;
+    std::vector<nn::BoxSample> samples;
+    for (const std::string& path : r->data) {
+      const Dataset dataset = r->subset.Select(ReadDataset(path));
+      std::vector<nn::BoxSample> loaded = nn::LoadBoxSamples(dataset);
+      spdlog::info("{}: {} images, {} boxes ({} photos)", path, loaded.size(), dataset.NumObjects(), r->subset.subset);
+      samples.insert(samples.end(), std::make_move_iterator(loaded.begin()), std::make_move_iterator(loaded.end()));
+    }
+    const nn::RetinaNetTrainingResult result =
+        nn::TrainRetinaNet(samples, r->options, Describe(r->data, {}, r->subset), r->out);
+    if (result.validation_images == 0) {
+      spdlog::info("wrote {}: {} training images ({} boxes), no validation, last epoch {} kept ({:.0f} s)", r->out,
+                   result.train_images, result.train_boxes, result.record.epochs_run, result.record.seconds);
+      return;
+    }
+    spdlog::info("wrote {}: {} training images ({} boxes) / {} validation images, best val AP50 {:.4f} at epoch {} "
+                 "of {} ({:.0f} s)",
+                 r->out, result.train_images, result.train_boxes, result.validation_images, result.record.best_metric,
                  result.record.best_epoch, result.record.epochs_run, result.record.seconds);
   });
 }

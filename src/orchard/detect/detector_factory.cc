@@ -5,12 +5,14 @@
 #include "orchard/core/error.h"
 #include "orchard/core/models_dir.h"
 #include "orchard/detect/gmm/gmm_detector.h"
+#include "orchard/detect/retinanet_detector.h"
 #include "orchard/detect/unet_detector.h"
 
 namespace orchard {
 
 void DetectorChoice::Check() const {
-  ORCHARD_CHECK_OPTION(method == "gmm" || method == "unet", "unknown detector '", method, "' (available: gmm, unet)");
+  ORCHARD_CHECK_OPTION(method == "gmm" || method == "unet" || method == "retinanet", "unknown detector '", method,
+                       "' (available: gmm, unet, retinanet)");
   ORCHARD_CHECK_OPTION(threads >= 0, "threads must be >= 0, got ", threads);
   blobs.Check();
 }
@@ -18,7 +20,8 @@ void DetectorChoice::Check() const {
 std::filesystem::path DefaultDetectorModel(const std::string& method) {
   if (method == "gmm") return DefaultModelsDir() / "gmm_red.json";
   if (method == "unet") return DefaultModelsDir() / "unet.pt";
-  Fail("unknown detector '", method, "' (available: gmm, unet)");
+  if (method == "retinanet") return DefaultModelsDir() / "retinanet.pt";
+  Fail("unknown detector '", method, "' (available: gmm, unet, retinanet)");
 }
 
 namespace {
@@ -48,6 +51,13 @@ std::unique_ptr<Detector> MakeDetector(const DetectorChoice& choice) {
   const std::filesystem::path model = ModelFile(choice);
   const int threads = Threads(choice);
   if (choice.method == "gmm") return std::make_unique<GmmDetector>(ReadColourModel(model), GmmOptions(choice, threads));
+  if (choice.method == "retinanet") {
+    RetinaNetDetectorOptions options;
+    options.blobs = choice.blobs;
+    options.threads = threads;
+    options.score_threshold = choice.retinanet_threshold;
+    return std::make_unique<RetinaNetDetector>(model, options);
+  }
   UNetDetectorOptions options;
   options.blobs = choice.blobs;
   options.threads = threads;

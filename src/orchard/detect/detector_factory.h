@@ -1,5 +1,5 @@
 // Builds a detector from its method name, so commands and the pipeline can
-// switch detectors with one option (`--detector gmm|unet`).
+// switch detectors with one option (`--detector gmm|unet|retinanet`).
 #pragma once
 
 #include <filesystem>
@@ -13,8 +13,9 @@
 namespace orchard {
 
 struct DetectorChoice {
-  std::string method = "gmm";  // "gmm" (colour mixtures) or "unet" (segmentation network)
-  // Model file; empty = the shipped default (models/gmm_red.json, models/unet.pt).
+  // "gmm" (colour mixtures), "unet" (segmentation network) or "retinanet" (box detector)
+  std::string method = "gmm";
+  // Model file; empty = the shipped default (models/gmm_red.json, models/unet.pt, models/retinanet.pt).
   std::filesystem::path model;
   bool reference_slic = false;  // gmm: OpenCV's SLIC at full resolution (slow reference path)
   bool gmm_refine_edges = true;  // gmm: GmmDetectorOptions::refine_edges (fast path)
@@ -23,6 +24,7 @@ struct DetectorChoice {
   int threads = 0;  // 0 = all cores
   double unet_threshold = 0.5;
   bool unet_whole_frame = false;  // unet: one pass over the whole frame instead of tiles
+  double retinanet_threshold = 0.5;  // retinanet: boxes scoring below this are dropped
 
   void Check() const;
 };

@@ -102,7 +102,12 @@ class OneEach : public Counter {
   BlobCount Count(const cv::Mat&, const cv::Mat1b&) override { return BlobCount{}; }
 };
 
-TEST(ResolvedBestViews, CountsForInstanceMasksCountedOnePerBlobPixelsOtherwise) {
+class NoFruit : public Detector {
+ public:
+  FrameDetection Detect(const cv::Mat&) override { return FrameDetection{}; }
+};
+
+TEST(ResolvedBestViews, CountsWhenBlobsAreCountedOneApplePixelsOtherwise) {
   SideInputs masks;  // no detector, no counter
   ClusterOptions o;
   EXPECT_EQ(ResolvedBestViews(o, masks), ClusterOptions::BestViews::kCount);
@@ -110,6 +115,10 @@ TEST(ResolvedBestViews, CountsForInstanceMasksCountedOnePerBlobPixelsOtherwise) 
   SideInputs counted = masks;
   counted.counter = &counter;  // masks read by a counter: its counts are estimates
   EXPECT_EQ(ResolvedBestViews(o, counted), ClusterOptions::BestViews::kPixels);
+  NoFruit detector;
+  SideInputs boxes = masks;
+  boxes.detector = &detector;  // a box detector's blobs, one apple each
+  EXPECT_EQ(ResolvedBestViews(o, boxes), ClusterOptions::BestViews::kCount);
   o.best_views_by = ClusterOptions::BestViews::kPixels;
   EXPECT_EQ(ResolvedBestViews(o, masks), ClusterOptions::BestViews::kPixels);
   o.best_views_by = ClusterOptions::BestViews::kCount;

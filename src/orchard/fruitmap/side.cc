@@ -203,8 +203,9 @@ void ClusterOptions::Check() const {
 
 ClusterOptions::BestViews ResolvedBestViews(const ClusterOptions& o, const SideInputs& in) {
   if (o.best_views_by != ClusterOptions::BestViews::kAuto) return o.best_views_by;
-  // Exact counts per view: instance masks, one apple per blob.
-  return !in.detector && !in.counter ? ClusterOptions::BestViews::kCount : ClusterOptions::BestViews::kPixels;
+  // Counts per view are apple instances (instance masks or a box detector's
+  // boxes, one apple per blob): take the views that show the most apples.
+  return !in.counter ? ClusterOptions::BestViews::kCount : ClusterOptions::BestViews::kPixels;
 }
 
 const char* BestViewsName(ClusterOptions::BestViews best_views) {

@@ -100,7 +100,8 @@ struct ClusterOptions {
   // biggest views hide one (40 development sides: within 3% 33 -> 34, MAE
   // 2.06 -> 1.48%; 10 unseen sides: 6 -> 8, MAE 2.16 -> 2.20%; docs/side.md). A counter's counts are estimates, and the highest
   // of many estimates is too high (default pipeline: +23% on 18 rows).
-  // kAuto: kCount for instance masks counted one per blob, else kPixels
+  // kAuto: kCount when every blob is one apple (instance masks, a box
+  // detector's boxes: no counter), else kPixels
   // (RunSide decides; CountFruitClusters takes kAuto as kPixels).
   enum class BestViews { kAuto, kPixels, kCount };
   BestViews best_views_by = BestViews::kAuto;
@@ -296,8 +297,8 @@ struct SideInputs {
   fs::path truth;
 };
 
-// options.best_views_by with kAuto decided for these inputs: kCount for
-// instance masks counted one per blob (no detector, no counter), else kPixels.
+// options.best_views_by with kAuto decided for these inputs: kCount when
+// blobs are counted one apple each (no counter: instance masks, boxes), else kPixels.
 ClusterOptions::BestViews ResolvedBestViews(const ClusterOptions& options, const SideInputs& in);
 // "auto", "pixels" or "count", as the command line and the outputs name them.
 const char* BestViewsName(ClusterOptions::BestViews best_views);

@@ -1,5 +1,7 @@
 #include "orchard/nn/models.h"
 
+#include <algorithm>
+
 #include "orchard/core/error.h"
 
 namespace orchard::nn {
@@ -86,7 +88,8 @@ void ResNetOptions::Check() const {
   ORCHARD_CHECK_OPTION(depth == 18 || depth == 34 || depth == 50, "ResNet depth must be 18, 34 or 50, got ", depth);
   ORCHARD_CHECK_OPTION(base_width >= 4 && base_width <= 256, "ResNet base width must be in [4, 256], got ", base_width);
   ORCHARD_CHECK_OPTION(in_channels >= 1, "input channels must be positive, got ", in_channels);
-  ORCHARD_CHECK_OPTION(num_classes >= 2, "a classifier needs at least 2 classes, got ", num_classes);
+  ORCHARD_CHECK_OPTION(num_classes == 0 || num_classes >= 2,
+                       "a classifier needs at least 2 classes (0 = no classifier), got ", num_classes);
 }
 
 nlohmann::json ResNetOptions::ToJson() const {
@@ -130,16 +133,18 @@ ResNetImpl::ResNetImpl(const ResNetOptions& options) : options_(options) {
         in = width;
       }
     }
+    stage_ends_.push_back(stages_->size());
     if (s == 1 && options_.density_head) {
       density_after_block_ = stages_->size();
       density_ = register_module("density", ConvBnRelu(in, in, 3, 1));
       density_->push_back(tnn::Conv2d(tnn::Conv2dOptions(in, 1, 1)));
     }
   }
-  head_ = register_module("head", tnn::Linear(in, options_.num_classes));
+  if (options_.num_classes > 0) head_ = register_module("head", tnn::Linear(in, options_.num_classes));
 }
 
 torch::Tensor ResNetImpl::Classify(const torch::Tensor& features) {
+  if (!head_) Fail("this ResNet is a backbone without a classifier");
   return head_(torch::adaptive_avg_pool2d(features, {1, 1}).flatten(1));
 }
 
@@ -155,6 +160,25 @@ std::pair<torch::Tensor, torch::Tensor> ResNetImpl::ForwardWithDensity(torch::Te
     if (++blocks == density_after_block_) density = torch::relu(density_->forward(x));
   }
   return {Classify(x), density};
+}
+
+std::vector<torch::Tensor> ResNetImpl::ForwardStages(torch::Tensor x) {
+  x = stem_->forward(x);
+  std::vector<torch::Tensor> outputs;
+  size_t blocks = 0;
+  for (auto& block : *stages_) {
+    x = block.forward(x);
+    ++blocks;
+    if (std::find(stage_ends_.begin(), stage_ends_.end(), blocks) != stage_ends_.end()) outputs.push_back(x);
+  }
+  return outputs;
+}
+
+std::vector<int> ResNetImpl::StageChannels() const {
+  const int expansion = options_.depth >= 50 ? BottleneckImpl::kExpansion : 1;
+  std::vector<int> channels;
+  for (size_t s = 0; s < stage_ends_.size(); ++s) channels.push_back((options_.base_width << s) * expansion);
+  return channels;
 }
 
 void UNetOptions::Check() const {

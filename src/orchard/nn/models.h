@@ -20,7 +20,7 @@ struct ResNetOptions {
   // Channels of the first stage (64 in the paper). 16 trains on CPU.
   int base_width = 64;
   int in_channels = 3;
-  int num_classes = 7;  // counts 0..6
+  int num_classes = 7;  // counts 0..6; 0 = no classifier (a backbone: ForwardStages)
   // A second output: a density map at 1/8 of the input (after the second
   // stage) whose sum is the count. Trained with the apples' positions as
   // point supervision, it teaches the shared layers where each apple is; the
@@ -39,6 +39,11 @@ class ResNetImpl : public torch::nn::Module {
   torch::Tensor forward(torch::Tensor x);
   // Logits and the density map [N, 1, H/8, W/8] (options().density_head only).
   std::pair<torch::Tensor, torch::Tensor> ForwardWithDensity(torch::Tensor x);
+  // The output of each of the four stages (strides 4, 8, 16, 32): the
+  // feature pyramid's inputs.
+  std::vector<torch::Tensor> ForwardStages(torch::Tensor x);
+  // Channels of each stage's output.
+  std::vector<int> StageChannels() const;
   const ResNetOptions& options() const { return options_; }
 
  private:
@@ -51,6 +56,7 @@ class ResNetImpl : public torch::nn::Module {
   torch::nn::Linear head_{nullptr};
   torch::nn::Sequential density_{nullptr};
   size_t density_after_block_ = 0;  // blocks of the first two stages
+  std::vector<size_t> stage_ends_;  // blocks up to the end of each stage
 };
 TORCH_MODULE(ResNet);
 
