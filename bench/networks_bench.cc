@@ -1,9 +1,10 @@
 // Inference speed of the networks on this machine, side by side with the
 // colour detector in the same run: U-Net seconds per 1920x1080 frame (goal:
 // at most 1 s on 2 cores; the study's implementation took 4.5 s on a GPU) and
-// CNN counter patches per second.
+// CNN counter patches per second; with a RetinaNet model, its seconds per
+// frame at input scales 1 and 2 beside the U-Net's.
 //
-//   bench_networks UNET.pt COUNTER.pt GMM.json IMAGE_DIR [FRAMES]
+//   bench_networks UNET.pt COUNTER.pt GMM.json IMAGE_DIR [FRAMES] [RETINANET.pt]
 #include <chrono>
 #include <cstdio>
 #include <string>
@@ -27,7 +28,7 @@ double Seconds(std::chrono::steady_clock::time_point start) {
 int main(int argc, char** argv) {
   using namespace orchard;
   if (argc < 5) {
-    std::fprintf(stderr, "usage: bench_networks UNET.pt COUNTER.pt GMM.json IMAGE_DIR [FRAMES]\n");
+    std::fprintf(stderr, "usage: bench_networks UNET.pt COUNTER.pt GMM.json IMAGE_DIR [FRAMES] [RETINANET.pt]\n");
     return 2;
   }
   try {
@@ -66,6 +67,22 @@ int main(int argc, char** argv) {
                 unet_s <= 1.0 ? "PASS" : "NOT MET");
     std::printf("GMM detector:   %.3f s/frame (%zu blobs); U-Net / GMM time ratio %.1f\n", gmm_s, gmm_blobs,
                 unet_s / gmm_s);
+    if (argc > 6) {
+      for (double scale : {1.0, 2.0}) {
+        DetectorChoice retina_choice;
+        retina_choice.method = "retinanet";
+        retina_choice.model = argv[6];
+        retina_choice.retinanet_scale = scale;
+        auto retina = MakeDetector(retina_choice);
+        retina->Detect(images[0]);
+        size_t boxes = 0;
+        start = std::chrono::steady_clock::now();
+        for (const cv::Mat& image : images) boxes += retina->Detect(image).blobs.size();
+        const double retina_s = Seconds(start) / images.size();
+        std::printf("RetinaNet detector, input scale %.0f: %.3f s/frame (%zu boxes); RetinaNet / U-Net time ratio %.2f\n",
+                    scale, retina_s, boxes, retina_s / unet_s);
+      }
+    }
     // The same U-Net in one pass over the whole frame: time and agreement
     // with the tiled masks.
     unet_choice.unet_whole_frame = true;

@@ -35,6 +35,9 @@ void AddDetectCommand(CLI::App& app) {
                   "unet: apple probability threshold; retinanet: box score threshold (0.05 writes every candidate, "
                   "for precision-recall curves and AP)")
       ->capture_default_str();
+  cmd->add_option("--input-scale", args->detector.retinanet_scale,
+                  "retinanet: frames are resized by this before the network, boxes mapped back")
+      ->capture_default_str();
   cmd->add_flag("--reference-slic", args->detector.reference_slic,
                 "gmm: OpenCV's SLIC at full resolution (slow reference path)");
   cmd->add_flag("!--working-scale-edges", args->detector.gmm_refine_edges,

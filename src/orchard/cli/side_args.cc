@@ -136,6 +136,9 @@ void AddFruitOptions(CLI::App* cmd, FruitArgs* a) {
       ->capture_default_str();
   cmd->add_option("--retinanet-threshold", a->retinanet_threshold, "A RetinaNet box is an apple above this score")
       ->capture_default_str();
+  cmd->add_option("--retinanet-scale", a->retinanet_scale,
+                  "Frames are resized by this before the RetinaNet (2: apples twice the size they show)")
+      ->capture_default_str();
   cmd->add_option("--min-apple-posterior", a->gmm_min_apple_posterior,
                   "gmm: a superpixel is apple when the KL rule says so and its apple posterior is at least this")
       ->capture_default_str();
@@ -166,6 +169,7 @@ void SetUpFruit(FruitArgs a, const std::string& masks, FruitTools* tools, SideIn
       choice.blobs.min_pixels = a.min_blob_pixels;
       choice.unet_threshold = a.unet_threshold;
       choice.retinanet_threshold = a.retinanet_threshold;
+      choice.retinanet_scale = a.retinanet_scale;
       choice.gmm_min_apple_posterior = a.gmm_min_apple_posterior;
       tools->detector = MakeDetector(choice);
     }
@@ -180,6 +184,8 @@ void SetUpFruit(FruitArgs a, const std::string& masks, FruitTools* tools, SideIn
       in->detector_name += " threshold=" + std::to_string(a.unet_threshold);
     if (a.detector == "retinanet" && a.retinanet_threshold != DetectorChoice().retinanet_threshold)
       in->detector_name += " threshold=" + std::to_string(a.retinanet_threshold);
+    if (a.detector == "retinanet" && a.retinanet_scale != DetectorChoice().retinanet_scale)
+      in->detector_name += " scale=" + std::to_string(a.retinanet_scale);
     if (a.detector == "gmm" && a.gmm_min_apple_posterior != FruitArgs().gmm_min_apple_posterior)
       in->detector_name += " min_apple_posterior=" + std::to_string(a.gmm_min_apple_posterior);
   }

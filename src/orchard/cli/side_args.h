@@ -34,6 +34,7 @@ struct FruitArgs {
   int min_blob_pixels = 20;
   double unet_threshold = DetectorChoice().unet_threshold;  // apple probability of a U-Net pixel
   double retinanet_threshold = DetectorChoice().retinanet_threshold;  // score of a RetinaNet box
+  double retinanet_scale = DetectorChoice().retinanet_scale;  // frames resized by this for the RetinaNet
   // The colour detector's posterior gate is off here (the KL rule alone):
   // the gate that lifts photo precision (docs/detection.md) costs the 3D
   // stage the pieces of apples the red model half-recognises (demo row:

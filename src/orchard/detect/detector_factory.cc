@@ -56,6 +56,7 @@ std::unique_ptr<Detector> MakeDetector(const DetectorChoice& choice) {
     options.blobs = choice.blobs;
     options.threads = threads;
     options.score_threshold = choice.retinanet_threshold;
+    options.input_scale = choice.retinanet_scale;
     return std::make_unique<RetinaNetDetector>(model, options);
   }
   UNetDetectorOptions options;

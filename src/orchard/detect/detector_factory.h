@@ -25,6 +25,7 @@ struct DetectorChoice {
   double unet_threshold = 0.5;
   bool unet_whole_frame = false;  // unet: one pass over the whole frame instead of tiles
   double retinanet_threshold = 0.5;  // retinanet: boxes scoring below this are dropped
+  double retinanet_scale = 1;        // retinanet: frames resized by this before the network
 
   void Check() const;
 };

@@ -21,6 +21,7 @@ void RetinaNetDetectorOptions::Check() const {
                        score_threshold);
   ORCHARD_CHECK_OPTION(nms_iou > 0 && nms_iou <= 1, "NMS IoU must be in (0, 1], got ", nms_iou);
   ORCHARD_CHECK_OPTION(max_detections >= 1, "max detections must be positive, got ", max_detections);
+  ORCHARD_CHECK_OPTION(input_scale >= 0.25 && input_scale <= 4, "input scale must be in [0.25, 4], got ", input_scale);
   ORCHARD_CHECK_OPTION(threads >= 0, "threads must be >= 0, got ", threads);
   blobs.Check();
 }
@@ -48,7 +49,19 @@ FrameDetection RetinaNetDetector::Detect(const cv::Mat& bgr) {
   decode.score_threshold = impl_->options.score_threshold;
   decode.nms_iou = impl_->options.nms_iou;
   decode.max_detections = impl_->options.max_detections;
-  const std::vector<nn::ScoredApple> apples = nn::DetectApples(impl_->net, bgr, decode);
+  const double scale = impl_->options.input_scale;
+  std::vector<nn::ScoredApple> apples;
+  if (scale == 1) {
+    apples = nn::DetectApples(impl_->net, bgr, decode);
+  } else {
+    if (bgr.empty()) Fail("empty frame");
+    cv::Mat resized;
+    cv::resize(bgr, resized, cv::Size(), scale, scale, scale < 1 ? cv::INTER_AREA : cv::INTER_LINEAR);
+    apples = nn::DetectApples(impl_->net, resized, decode);
+    for (nn::ScoredApple& a : apples) {
+      a.box = {a.box.x1 / scale, a.box.y1 / scale, a.box.x2 / scale, a.box.y2 / scale};
+    }
+  }
   FrameDetection detection;
   detection.mask = cv::Mat1b::zeros(bgr.size());
   detection.labels = cv::Mat1i::zeros(bgr.size());

@@ -17,6 +17,9 @@ struct RetinaNetDetectorOptions {
   double score_threshold = 0.5;
   double nms_iou = 0.5;        // non-maximum suppression between boxes (the paper's)
   int max_detections = 1000;   // per frame, highest scores first
+  // Frames are resized by this factor before the network and the boxes mapped
+  // back: apples in video frames can be smaller than the network learnt them.
+  double input_scale = 1;
   BlobOptions blobs;           // boxes whose ellipse covers fewer pixels are dropped
   int threads = 0;             // LibTorch threads; 0 = all cores
 

@@ -92,6 +92,22 @@ TEST(RetinaNetDetector, TrainsTinyNetworkAndFindsDiscs) {
     }
   }
   EXPECT_EQ(cv::countNonZero(detection.mask), cv::countNonZero(detection.labels > 0));
+  // A frame at half size, enlarged twice by the detector: about the same
+  // boxes, in the small frame's pixels.
+  RetinaNetDetectorOptions scaled_options = detector_options;
+  scaled_options.input_scale = 2;
+  scaled_options.blobs.min_pixels = 5;
+  RetinaNetDetector scaled(dir / "r.pt", scaled_options);
+  cv::Mat half;
+  cv::resize(test.bgr, half, cv::Size(), 0.5, 0.5, cv::INTER_AREA);
+  const FrameDetection small = scaled.Detect(half);
+  ASSERT_EQ(small.mask.size(), half.size());
+  ASSERT_GE(small.blobs.size(), 1u);
+  ASSERT_GE(detection.blobs.size(), 1u);
+  const Box& b = small.blobs[0].box;
+  double best = 0;
+  for (const Blob& blob : detection.blobs) best = std::max(best, IoU(Box{2 * b.x1, 2 * b.y1, 2 * b.x2, 2 * b.y2}, blob.box));
+  EXPECT_GT(best, 0.6);
   // Reloading gives identical boxes.
   RetinaNetDetector again(dir / "r.pt", detector_options);
   const FrameDetection repeat = again.Detect(test.bgr);
@@ -122,6 +138,9 @@ TEST(RetinaNetDetector, RejectsWrongFilesAndOptions) {
   RetinaNetDetectorOptions bad;
   bad.score_threshold = 0;
   EXPECT_THROW(bad.Check(), Error);
+  RetinaNetDetectorOptions huge;
+  huge.input_scale = 10;
+  EXPECT_THROW(huge.Check(), Error);
   nn::RetinaNetTrainingOptions training;
   training.tile = 100;
   EXPECT_THROW(training.Check(), Error);
