@@ -162,8 +162,8 @@ std::vector<ScoredApple> DetectApples(RetinaNet& net, const cv::Mat& bgr, const 
   cv::Mat padded;
   cv::copyMakeBorder(bgr, padded, 0, height - bgr.rows, 0, width - bgr.cols, cv::BORDER_CONSTANT, cv::Scalar::all(0));
   auto [logits, deltas] = net->forward(ImagesToTensor({padded}));
-  return DecodeDetections(logits[0], deltas[0], net->Anchors(height, width), net->options(), bgr.rows, bgr.cols,
-                          options);
+  return DecodeDetections(logits[0], deltas[0], net->Anchors(height, width), net->options(), cv::Size(width, height),
+                          bgr.size(), options);
 }
 
 RetinaNetTrainingResult TrainRetinaNet(const std::vector<BoxSample>& samples, const RetinaNetTrainingOptions& options,

@@ -237,14 +237,28 @@ torch::Tensor RetinaNetLoss(const torch::Tensor& logits, const torch::Tensor& de
 
 std::vector<ScoredApple> DecodeDetections(const torch::Tensor& logits, const torch::Tensor& deltas,
                                           const torch::Tensor& anchors, const RetinaNetOptions& architecture,
-                                          int height, int width, const DecodeOptions& options) {
+                                          cv::Size input, cv::Size image, const DecodeOptions& options) {
+  if (input.width % RetinaNetOptions::kInputMultiple != 0 || input.height % RetinaNetOptions::kInputMultiple != 0) {
+    Fail("internal: RetinaNet input sides must be multiples of ", RetinaNetOptions::kInputMultiple);
+  }
+  const int width = image.width, height = image.height;
   const torch::Tensor scores = torch::sigmoid(logits.detach().to(torch::kFloat32));
   std::vector<cv::Rect2d> rects;
   std::vector<float> kept_scores;
+  // Each level's anchors are a contiguous run (RetinaNetImpl::Anchors).
+  std::vector<int64_t> counts;
+  for (int l = 0; l < kLevels; ++l) {
+    counts.push_back(static_cast<int64_t>(LevelSize(input.height, l)) * LevelSize(input.width, l) *
+                     architecture.AnchorsPerCell());
+  }
+  const int64_t total = counts[0] + counts[1] + counts[2];
+  if (total != anchors.size(0) || total != logits.size(0) || total != deltas.size(0)) {
+    Fail("internal: ", logits.size(0), " outputs and ", anchors.size(0), " anchors for a ", input.width, "x",
+         input.height, " input, which has ", total);
+  }
   int64_t begin = 0;
   for (int l = 0; l < kLevels; ++l) {
-    const int64_t count =
-        static_cast<int64_t>(LevelSize(height, l)) * LevelSize(width, l) * architecture.AnchorsPerCell();
+    const int64_t count = counts[l];
     if (count == 0) continue;
     const torch::Tensor level = scores.slice(0, begin, begin + count);
     auto [top, index] = level.topk(std::min<int64_t>(count, options.candidates_per_level));

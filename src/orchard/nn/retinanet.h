@@ -11,6 +11,7 @@
 #include <vector>
 
 #include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
 #include <torch/torch.h>
 
 #include "orchard/core/box.h"
@@ -102,10 +103,11 @@ struct ScoredApple {
   double score = 0;
 };
 
-// The detections of one image from its logits [A] and deltas [A, 4]: boxes
-// clipped to width x height, highest score first.
+// The detections of one image from its logits [A] and deltas [A, 4] for the
+// anchors of a network input of `input` size (multiples of 32): boxes clipped
+// to `image` (the input before padding), highest score first.
 std::vector<ScoredApple> DecodeDetections(const torch::Tensor& logits, const torch::Tensor& deltas,
                                           const torch::Tensor& anchors, const RetinaNetOptions& architecture,
-                                          int height, int width, const DecodeOptions& options);
+                                          cv::Size input, cv::Size image, const DecodeOptions& options);
 
 }  // namespace orchard::nn

@@ -102,13 +102,25 @@ TEST(RetinaNet, DecodesAndSuppressesOverlappingBoxes) {
   logits[7] = 2.0;
   logits[9 * 30 + 4] = 1.0;
   const std::vector<ScoredApple> found =
-      DecodeDetections(logits, torch::zeros({n, 4}), anchors, o, 64, 64, DecodeOptions{});
+      DecodeDetections(logits, torch::zeros({n, 4}), anchors, o, cv::Size(64, 64), cv::Size(64, 64), DecodeOptions{});
   ASSERT_EQ(found.size(), 2u);
   EXPECT_NEAR(found[0].score, 1 / (1 + std::exp(-3.0)), 1e-5);
   EXPECT_NEAR(found[1].score, 1 / (1 + std::exp(-1.0)), 1e-5);
   // Boxes are clipped to the image.
   EXPECT_GE(found[0].box.x1, 0);
   EXPECT_GE(found[0].box.y1, 0);
+  // An image padded to the network's input: levels follow the input, boxes
+  // are clipped to the image; the coarsest level's last anchor is found too.
+  torch::Tensor last = torch::full({n}, -10.0);
+  last[n - 1] = 3.0;
+  const std::vector<ScoredApple> padded =
+      DecodeDetections(last, torch::zeros({n, 4}), anchors, o, cv::Size(64, 64), cv::Size(60, 50), DecodeOptions{});
+  ASSERT_EQ(padded.size(), 1u);
+  EXPECT_LE(padded[0].box.x2, 60);
+  EXPECT_LE(padded[0].box.y2, 50);
+  EXPECT_THROW(DecodeDetections(last, torch::zeros({n, 4}), anchors, o, cv::Size(96, 64), cv::Size(60, 50),
+                                DecodeOptions{}),
+               Error);
 }
 
 }  // namespace
