@@ -21,12 +21,13 @@ void AddDetectCommand(CLI::App& app) {
     bool fruit_boxes = false;
   };
   auto args = std::make_shared<Args>();
-  cmd->add_option("--method", args->detector.method, "Detector: gmm (colour mixtures), unet (segmentation network) or retinanet (box detector: one blob per "
-                  "apple)")
+  cmd->add_option("--method", args->detector.method,
+                  "Detector: gmm (colour mixtures), unet (segmentation network) or retinanet (box detector: one blob "
+                  "per apple)")
       ->capture_default_str();
   cmd->add_option("--model", args->detector.model,
-                  "Model file: gmm colour model json (`orchard train gmm`), unet or retinanet .pt (`orchard train unet|retinanet`); "
-                  "default: the shipped models/gmm_red.json, models/unet.pt or models/retinanet.pt");
+                  "Model file: gmm colour model json (`orchard train gmm`), unet or retinanet .pt (`orchard train "
+                  "unet|retinanet`); default: the shipped models/gmm_red.json, models/unet.pt or models/retinanet.pt");
   cmd->add_option("--in", args->in, "Folder of images or a video file")->required();
   cmd->add_option("--out", args->out, "Output folder")->required();
   cmd->add_flag("--whole-frame", args->detector.unet_whole_frame,
@@ -56,7 +57,8 @@ void AddDetectCommand(CLI::App& app) {
   cmd->add_option("--max-frames", args->frames.max_frames, "Stop after this many frames (0 = all)")
       ->capture_default_str();
   cmd->add_option("--threads", args->detector.threads,
-                  "Threads (0 = all cores): gmm detects this many frames at once, unet and retinanet run their network on them")
+                  "Threads (0 = all cores): gmm detects this many frames at once, unet and retinanet run their "
+                  "network on them")
       ->capture_default_str();
   cmd->callback([args]() {
     args->detector.retinanet_threshold = args->detector.unet_threshold;
