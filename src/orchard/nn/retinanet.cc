@@ -217,21 +217,19 @@ AnchorTargets MatchAnchors(const torch::Tensor& anchors, const std::vector<Box>&
 
 torch::Tensor RetinaNetLoss(const torch::Tensor& logits, const torch::Tensor& deltas, const torch::Tensor& anchors,
                             const std::vector<AnchorTargets>& targets) {
-  const torch::Tensor labels = torch::stack([&] {
-    std::vector<torch::Tensor> l;
-    for (const AnchorTargets& t : targets) l.push_back(t.labels);
-    return l;
-  }());
+  std::vector<torch::Tensor> labels_per_image, boxes_per_image;
+  for (const AnchorTargets& t : targets) {
+    labels_per_image.push_back(t.labels);
+    boxes_per_image.push_back(t.boxes);
+  }
+  const torch::Tensor labels = torch::stack(labels_per_image);  // [N, A]
   const torch::Tensor valid = labels >= 0, positive = labels > 0;
   const double positives = std::max<double>(1, positive.sum().item<double>());
-  torch::Tensor loss = SigmoidFocalLoss(logits.masked_select(valid), labels.masked_select(valid));
-  torch::Tensor box_loss = torch::zeros({}, logits.options());
-  for (size_t i = 0; i < targets.size(); ++i) {
-    const torch::Tensor pos = positive[static_cast<int64_t>(i)].nonzero().squeeze(1);
-    if (pos.numel() == 0) continue;
-    const torch::Tensor target = EncodeBoxes(targets[i].boxes.index_select(0, pos), anchors.index_select(0, pos));
-    box_loss = box_loss + (deltas[static_cast<int64_t>(i)].index_select(0, pos) - target).abs().sum();
-  }
+  const torch::Tensor loss = SigmoidFocalLoss(logits.masked_select(valid), labels.masked_select(valid));
+  // The positives of every image at once: [P, 4] deltas, boxes and anchors.
+  const torch::Tensor target = EncodeBoxes(torch::stack(boxes_per_image).index({positive}),
+                                           anchors.expand({labels.size(0), -1, -1}).index({positive}));
+  const torch::Tensor box_loss = (deltas.index({positive}) - target).abs().sum();
   return (loss + box_loss) / positives;
 }
 
@@ -243,6 +241,7 @@ std::vector<ScoredApple> DecodeDetections(const torch::Tensor& logits, const tor
   }
   const int width = image.width, height = image.height;
   const torch::Tensor scores = torch::sigmoid(logits.detach().to(torch::kFloat32));
+  const torch::Tensor box_deltas = deltas.detach().to(torch::kFloat32);
   std::vector<cv::Rect2d> rects;
   std::vector<float> kept_scores;
   // Each level's anchors are a contiguous run (RetinaNetImpl::Anchors).
@@ -268,7 +267,7 @@ std::vector<ScoredApple> DecodeDetections(const torch::Tensor& logits, const tor
     begin += count;
     if (index.numel() == 0) continue;
     const torch::Tensor boxes =
-        DecodeBoxes(deltas.detach().to(torch::kFloat32).index_select(0, index), anchors.index_select(0, index));
+        DecodeBoxes(box_deltas.index_select(0, index), anchors.index_select(0, index));
     const auto b = boxes.accessor<float, 2>();
     const auto s = top.accessor<float, 1>();
     for (int64_t i = 0; i < boxes.size(0); ++i) {
