@@ -63,6 +63,7 @@ void AddDemoCommand(CLI::App& app) {
     }
     YieldOptions options;
     options.side.colmap.camera_model = "PINHOLE";  // the generator's camera has no distortion
+    options.side.colmap.num_threads = a->fruit.threads;
     // The true poses share one frame; registering from the fruit needs more
     // clusters than the shipped detectors find on a two-tree row.
     options.poses_registered = !a->colmap;

@@ -129,7 +129,11 @@ void AddFruitOptions(CLI::App* cmd, FruitArgs* a) {
                   "Apples per blob: cnn, gmm, blob (one each), or auto (blob for --detector masks and retinanet, else cnn)")
       ->capture_default_str();
   cmd->add_option("--counter-model", a->counter_model, "Counter model (default: the shipped one)");
-  cmd->add_option("--threads", a->threads, "Detector and counter threads (0 = all cores)")->capture_default_str();
+  cmd->add_option("--threads", a->threads,
+                  "Threads of the detector, the counter and COLMAP (0 = all the cores this process may use; give "
+                  "each of several runs on one machine its share)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   cmd->add_option("--min-blob-pixels", a->min_blob_pixels, "Detector blobs smaller than this (pixels) are dropped")
       ->capture_default_str();
   cmd->add_option("--unet-threshold", a->unet_threshold, "A pixel is apple above this U-Net probability")

@@ -40,6 +40,7 @@ void AddSideCommand(CLI::App& app) {
     if (!a->ground.empty()) in.ground = ParseGroundPlane(a->ground);
     FruitTools tools;
     SetUpFruit(a->fruit, a->masks, &tools, &in);
+    a->options.colmap.num_threads = a->fruit.threads;
     const SideSummary s = RunSide(in, a->options);
     std::printf("count %d (single-frame sum %d), %d clusters kept, %d removed, %d frames -> %s\n", s.count,
                 s.single_frame_sum, s.clusters_kept, s.clusters_removed, s.frames_used, a->out.c_str());

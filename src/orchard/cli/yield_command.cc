@@ -91,6 +91,7 @@ void AddYieldCommand(CLI::App& app) {
       for (auto [side, inputs] : {std::pair<const char*, SideInputs*>{"front", &in.front}, {"back", &in.back}})
         if (const fs::path dir = fs::path(in.truth).parent_path() / side; fs::is_directory(dir / "masks"))
           inputs->truth = dir;
+    a->options.side.colmap.num_threads = a->fruit.threads;
     const YieldSummary y = RunYield(in, a->options);
     std::printf("row: %d apples (front %d, back %d, seen from both sides %.1f; unmerged sum %d) -> %s/yield.json\n",
                 y.total, y.front, y.back, y.shared, y.sum_of_sides, a->out.c_str());

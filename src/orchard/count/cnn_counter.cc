@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <thread>
 
+#include "orchard/core/cpu.h"
 #include "orchard/core/error.h"
 #include "orchard/nn/checkpoint.h"
 #include "orchard/nn/counter_ensemble.h"
@@ -61,7 +61,7 @@ CnnCounter::CnnCounter(const std::filesystem::path& model_path, int threads, con
     nn::LoadCheckpointWeights(*impl_->nets[0], model_path);
     impl_->nets[0]->eval();
   }
-  at::set_num_threads(threads > 0 ? threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
+  at::set_num_threads(ThreadsOrAvailableCores(threads));
 }
 
 CnnCounter::~CnnCounter() = default;

@@ -1,7 +1,6 @@
 #include "orchard/detect/detector_factory.h"
 
-#include <thread>
-
+#include "orchard/core/cpu.h"
 #include "orchard/core/error.h"
 #include "orchard/core/models_dir.h"
 #include "orchard/detect/gmm/gmm_detector.h"
@@ -27,7 +26,7 @@ std::filesystem::path DefaultDetectorModel(const std::string& method) {
 namespace {
 
 int Threads(const DetectorChoice& choice) {
-  return choice.threads > 0 ? choice.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  return ThreadsOrAvailableCores(choice.threads);
 }
 
 std::filesystem::path ModelFile(const DetectorChoice& choice) {

@@ -1,9 +1,8 @@
 #include "orchard/detect/retinanet_detector.h"
 
-#include <thread>
-
 #include <opencv2/imgproc.hpp>
 
+#include "orchard/core/cpu.h"
 #include "orchard/core/error.h"
 #include "orchard/nn/checkpoint.h"
 #include "orchard/nn/detection_training.h"
@@ -38,8 +37,7 @@ RetinaNetDetector::RetinaNetDetector(const std::filesystem::path& model_path, co
   }
   nn::LoadCheckpointWeights(*impl_->net, model_path);
   impl_->net->eval();
-  at::set_num_threads(options.threads > 0 ? options.threads
-                                          : static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
+  at::set_num_threads(ThreadsOrAvailableCores(options.threads));
 }
 
 RetinaNetDetector::~RetinaNetDetector() = default;

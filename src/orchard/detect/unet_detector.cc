@@ -1,9 +1,8 @@
 #include "orchard/detect/unet_detector.h"
 
-#include <thread>
-
 #include <opencv2/imgproc.hpp>
 
+#include "orchard/core/cpu.h"
 #include "orchard/core/error.h"
 #include "orchard/nn/checkpoint.h"
 #include "orchard/nn/models.h"
@@ -42,8 +41,7 @@ UNetDetector::UNetDetector(const std::filesystem::path& model_path, const UNetDe
   }
   nn::LoadCheckpointWeights(*impl_->net, model_path);
   impl_->net->eval();
-  at::set_num_threads(options.threads > 0 ? options.threads
-                                          : static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
+  at::set_num_threads(ThreadsOrAvailableCores(options.threads));
 }
 
 UNetDetector::~UNetDetector() = default;

@@ -6,10 +6,10 @@
 #include <memory>
 #include <cstdio>
 #include <numeric>
-#include <thread>
 
 #include <unistd.h>
 
+#include "orchard/core/cpu.h"
 #include "orchard/core/error.h"
 #include "orchard/core/file_io.h"
 
@@ -155,8 +155,7 @@ TrainingRecord TrainingRecord::FromJson(const nlohmann::json& json) {
 }
 
 void SetUpTorch(const TrainerOptions& options) {
-  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  at::set_num_threads(options.threads > 0 ? options.threads : cores);
+  at::set_num_threads(ThreadsOrAvailableCores(options.threads));
   torch::manual_seed(options.seed);
 }
 

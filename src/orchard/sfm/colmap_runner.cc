@@ -7,6 +7,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "orchard/core/cpu.h"
 #include "orchard/core/error.h"
 #include "orchard/core/file_io.h"
 
@@ -38,6 +39,7 @@ void ColmapRunnerOptions::Check() const {
   ORCHARD_CHECK_OPTION(retry_unregistered_fraction >= 0 && retry_unregistered_fraction <= 1,
                        "retry unregistered fraction must be in [0, 1], got ", retry_unregistered_fraction);
   ORCHARD_CHECK_OPTION(min_registered >= 2, "min registered frames must be at least 2, got ", min_registered);
+  ORCHARD_CHECK_OPTION(num_threads >= 0, "COLMAP threads must be 0 (all cores) or more, got ", num_threads);
 }
 
 bool ColmapAvailable(const std::string& colmap) {
@@ -58,16 +60,19 @@ void MatchColmapFeatures(const fs::path& image_dir, const fs::path& workspace, c
   const fs::path log = workspace / "colmap.log";
   const std::string db = Quote((workspace / "database.db").string());
   const std::string exe = Quote(options.colmap);
+  const std::string threads = std::to_string(ThreadsOrAvailableCores(options.num_threads));
   RunStep("feature_extractor",
           exe + " feature_extractor --database_path " + db + " --image_path " + Quote(image_dir.string()) +
               " --ImageReader.camera_model " + options.camera_model +
               " --ImageReader.single_camera 1 --SiftExtraction.use_gpu 0 --SiftExtraction.max_num_features " +
               std::to_string(options.max_num_features) +
-              " --SiftExtraction.first_octave " + std::to_string(options.first_octave),
+              " --SiftExtraction.first_octave " + std::to_string(options.first_octave) +
+              " --SiftExtraction.num_threads " + threads,
           log);
   RunStep("sequential_matcher",
           exe + " sequential_matcher --database_path " + db +
-              " --SiftMatching.use_gpu 0 --SequentialMatching.overlap " + std::to_string(options.overlap),
+              " --SiftMatching.use_gpu 0 --SequentialMatching.overlap " + std::to_string(options.overlap) +
+              " --SiftMatching.num_threads " + threads,
           log);
 }
 
@@ -89,7 +94,8 @@ ColmapRunResult MapColmap(const fs::path& image_dir, const fs::path& workspace, 
   RunStep("mapper",
           exe + " mapper --database_path " + Quote((workspace / "database.db").string()) + " --image_path " +
               Quote(image_dir.string()) + " --output_path " + Quote((workspace / "sparse").string()) +
-              " --random_seed " + std::to_string(options.random_seed),
+              " --random_seed " + std::to_string(options.random_seed) +
+              " --Mapper.num_threads " + std::to_string(ThreadsOrAvailableCores(options.num_threads)),
           log);
   ColmapRunResult result;
   result.num_input_images = static_cast<int>(images.size());

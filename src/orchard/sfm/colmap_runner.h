@@ -44,6 +44,10 @@ struct ColmapRunnerOptions {
   double retry_unregistered_fraction = 0.05;
   // Fewest registered frames for the reconstruction to be usable.
   int min_registered = 5;
+  // Threads of COLMAP's extraction, matching and mapping; 0 = the cores this
+  // process may use (AvailableCores), where COLMAP's own default takes every
+  // CPU of the machine. `--threads` of orchard side|yield sets it.
+  int num_threads = 0;
   void Check() const;
 };
 

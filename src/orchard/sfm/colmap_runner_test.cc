@@ -2,6 +2,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "orchard/core/cpu.h"
 #include "orchard/core/error.h"
 #include "orchard/core/file_io.h"
 #include "orchard/sfm/colmap_runner.h"
@@ -33,6 +34,38 @@ TEST(ColmapRunner, TooFewFramesAndMissingProgram) {
   EXPECT_NE(Message([&] { RunColmap(dir, dir / "ws", o); }).find("cannot be run"), std::string::npos);
   o.camera_model = "FISHEYE";
   EXPECT_NE(Message([&] { RunColmap(dir, dir / "ws", o); }).find("camera model"), std::string::npos);
+  fs::remove_all(dir);
+}
+
+// COLMAP's own default thread count is every CPU of the machine; the runner
+// passes the count it is given, or the cores this process may use.
+TEST(ColmapRunner, PassesItsThreadCountToEveryStep) {
+  const fs::path dir = TempDir("threads");
+  for (int i = 0; i < 5; ++i)
+    cv::imwrite((dir / ("f" + std::to_string(i) + ".png")).string(), cv::Mat3b(32, 32, cv::Vec3b(i, i, i)));
+  // A stand-in for the colmap program that records its arguments and makes
+  // the database the mapper looks for.
+  const fs::path fake = dir / "colmap.sh", args = dir / "args.txt";
+  WriteTextFileAtomic(fake, "#!/bin/sh\necho \"$@\" >> '" + args.string() +
+                                "'\nfor a in \"$@\"; do case $a in *database.db) touch \"$a\";; esac; done\n");
+  fs::permissions(fake, fs::perms::owner_all);
+  ColmapRunnerOptions o;
+  o.colmap = fake.string();
+  o.num_threads = 3;
+  MatchColmapFeatures(dir, dir / "ws", o);
+  EXPECT_THROW(MapColmap(dir, dir / "ws", o), Error);  // the stand-in writes no model
+  const std::string three = ReadTextFile(args);
+  EXPECT_NE(three.find("feature_extractor") , std::string::npos);
+  EXPECT_NE(three.find("--SiftExtraction.num_threads 3"), std::string::npos);
+  EXPECT_NE(three.find("--SiftMatching.num_threads 3"), std::string::npos);
+  EXPECT_NE(three.find("--Mapper.num_threads 3"), std::string::npos);
+  fs::remove(args);
+  o.num_threads = 0;
+  MatchColmapFeatures(dir, dir / "ws", o);
+  EXPECT_NE(ReadTextFile(args).find("--SiftExtraction.num_threads " + std::to_string(AvailableCores())),
+            std::string::npos);
+  o.num_threads = -1;
+  EXPECT_NE(Message([&] { MatchColmapFeatures(dir, dir / "ws", o); }).find("COLMAP threads"), std::string::npos);
   fs::remove_all(dir);
 }
 

@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "orchard/core/cpu.h"
 #include "orchard/core/error.h"
 #include "orchard/core/file_io.h"
 #include "orchard/sfm/colmap_model.h"
@@ -299,8 +300,7 @@ SynthSummary RunSynth(const SynthOptions& options, const fs::path& out_dir) {
   std::atomic<size_t> next{0}, done{0};
   std::mutex mutex;
   std::exception_ptr failure;
-  const int num_threads = options.threads > 0 ? options.threads
-                                              : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  const int num_threads = ThreadsOrAvailableCores(options.threads);
   auto worker = [&]() {
     for (;;) {
       const size_t k = next++;
