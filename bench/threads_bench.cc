@@ -10,7 +10,6 @@
 //   bench_threads COUNTER.pt PATCH_DIR [PATCHES]
 #include <ATen/Parallel.h>
 
-#include <chrono>
 #include <cstdio>
 #include <string>
 #include <thread>
@@ -19,15 +18,8 @@
 #include "orchard/core/cpu.h"
 #include "orchard/core/error.h"
 #include "orchard/core/file_io.h"
+#include "orchard/core/stopwatch.h"
 #include "orchard/count/cnn_counter.h"
-
-namespace {
-
-double Seconds(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
   using namespace orchard;
@@ -54,9 +46,9 @@ int main(int argc, char** argv) {
                           "available cores again"};
     for (int k = 0; k < 5; ++k) {
       at::set_num_threads(runs[k]);
-      const auto start = std::chrono::steady_clock::now();
+      Stopwatch stopwatch;
       counter.CountBatch(patches);
-      const double s = Seconds(start);
+      const double s = stopwatch.Lap();
       if (k == 0) reference = s;
       std::printf("%-28s %3d threads: %7.2f s, %7.1f patches/s, %.2fx the reference's time\n", what[k], runs[k], s,
                   patches.size() / s, s / reference);
