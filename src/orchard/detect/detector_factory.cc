@@ -25,10 +25,6 @@ std::filesystem::path DefaultDetectorModel(const std::string& method) {
 
 namespace {
 
-int Threads(const DetectorChoice& choice) {
-  return ThreadsOrAvailableCores(choice.threads);
-}
-
 std::filesystem::path ModelFile(const DetectorChoice& choice) {
   return choice.model.empty() ? DefaultDetectorModel(choice.method) : choice.model;
 }
@@ -48,7 +44,7 @@ GmmDetectorOptions GmmOptions(const DetectorChoice& choice, int threads) {
 std::unique_ptr<Detector> MakeDetector(const DetectorChoice& choice) {
   choice.Check();
   const std::filesystem::path model = ModelFile(choice);
-  const int threads = Threads(choice);
+  const int threads = ThreadsOrAvailableCores(choice.threads);
   if (choice.method == "gmm") return std::make_unique<GmmDetector>(ReadColourModel(model), GmmOptions(choice, threads));
   if (choice.method == "retinanet") {
     RetinaNetDetectorOptions options;
@@ -74,7 +70,8 @@ std::vector<std::unique_ptr<Detector>> MakeFrameDetectors(const DetectorChoice& 
   }
   choice.Check();
   const ColourModel model = ReadColourModel(ModelFile(choice));
-  for (int i = 0; i < Threads(choice); ++i)
+  const int frames_at_once = ThreadsOrAvailableCores(choice.threads);  // read once: it looks at /proc and /sys
+  for (int i = 0; i < frames_at_once; ++i)
     detectors.push_back(std::make_unique<GmmDetector>(model, GmmOptions(choice, 1)));
   return detectors;
 }
