@@ -48,6 +48,10 @@ void AddSideOptions(CLI::App* cmd, SideOptions* options) {
   cmd->add_option("--support-ratio", o.clusters.points.min_support_ratio,
                   "... and in this fraction of the frames it falls into")
       ->capture_default_str();
+  cmd->add_option("--explain-distance", o.clusters.points.explain_distance,
+                  "Take pairings strongest first; hits on blobs a kept point farther than this (m) lands on do not "
+                  "count (0 = off: each blob's best pairing)")
+      ->capture_default_str();
   cmd->add_option("--support-window", o.clusters.points.support_window, "Frames either side checked for support")
       ->capture_default_str();
   cmd->add_flag("--split-blobs,!--no-split-blobs", o.split_counted_blobs,

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <queue>
 #include <random>
 
 #include <opencv2/imgproc.hpp>
@@ -292,26 +294,84 @@ void FruitPointOptions::Check() const {
   ORCHARD_CHECK_OPTION(centre_fraction >= 0, "centre fraction must be >= 0, got ", centre_fraction);
   ORCHARD_CHECK_OPTION(apple_fraction >= 0 && apple_radius > 0, "apple fraction must be >= 0 and apple radius > 0, got ",
                        apple_fraction, ", ", apple_radius);
+  ORCHARD_CHECK_OPTION(explain_distance >= 0, "explain distance must be >= 0, got ", explain_distance);
   ORCHARD_CHECK_OPTION(min_depth > 0 && max_depth > min_depth, "depth range must satisfy 0 < min < max, got ",
                        min_depth, "..", max_depth);
+}
+
+namespace {
+
+bool Stronger(const FruitPointCandidate& a, const FruitPointCandidate& b) {
+  return a.point.support != b.point.support ? a.point.support > b.point.support : a.error < b.error;
+}
+
+}  // namespace
+
+std::vector<FruitPoint> ChooseFruitPoints(std::vector<std::vector<FruitPointCandidate>> per_blob,
+                                          const FruitPointOptions& o) {
+  o.Check();
+  std::vector<FruitPoint> points;
+  for (auto& c : per_blob) std::stable_sort(c.begin(), c.end(), Stronger);
+  if (o.explain_distance <= 0) {
+    for (const auto& c : per_blob)
+      if (!c.empty()) points.push_back(c.front().point);
+    return points;
+  }
+  // Queue of (blob, rank of its candidate), strongest first; ties by blob order.
+  const auto weaker = [&per_blob](const std::pair<int, int>& a, const std::pair<int, int>& b) {
+    const FruitPointCandidate& ca = per_blob[a.first][a.second];
+    const FruitPointCandidate& cb = per_blob[b.first][b.second];
+    if (Stronger(ca, cb)) return false;
+    if (Stronger(cb, ca)) return true;
+    return a.first > b.first;
+  };
+  std::priority_queue<std::pair<int, int>, std::vector<std::pair<int, int>>, decltype(weaker)> queue(weaker);
+  for (int b = 0; b < static_cast<int>(per_blob.size()); ++b)
+    if (!per_blob[b].empty()) queue.emplace(b, 0);
+  std::map<std::pair<int, int>, std::vector<Eigen::Vector3d>> landed;  // (frame, blob id) -> kept points on it
+  std::vector<std::pair<int, int>> kept;                               // (blob, rank)
+  while (!queue.empty()) {
+    const auto [b, rank] = queue.top();
+    queue.pop();
+    const FruitPointCandidate& c = per_blob[b][rank];
+    const auto explained = [&](const std::pair<int, int>& frame_blob) {
+      const auto it = landed.find(frame_blob);
+      return it != landed.end() && std::none_of(it->second.begin(), it->second.end(), [&](const Eigen::Vector3d& y) {
+               return (y - c.point.xyz).norm() <= o.explain_distance;
+             });
+    };
+    // Hits on blobs a stronger point elsewhere explains do not count; nor is
+    // a point kept from a blob so explained (only one that agrees with that
+    // point, so the apple's points stay together).
+    Support free;
+    free.in_image = c.in_image;
+    free.hits = static_cast<int>(std::count_if(c.hits.begin(), c.hits.end(), [&](const auto& fb) { return !explained(fb); }));
+    if (!explained({c.point.frame, c.point.blob_id}) && Accept(free, o)) {
+      kept.emplace_back(b, rank);
+      for (const auto& fb : c.hits) landed[fb].push_back(c.point.xyz);
+    } else if (rank + 1 < static_cast<int>(per_blob[b].size())) {
+      queue.emplace(b, rank + 1);
+    }
+  }
+  std::sort(kept.begin(), kept.end());
+  for (const auto& [b, rank] : kept) points.push_back(per_blob[b][rank].point);
+  return points;
 }
 
 std::vector<FruitPoint> TriangulateFruitPoints(const std::vector<CameraView>& views,
                                                const std::vector<FruitFrame>& frames, const FruitPointOptions& o) {
   o.Check();
   if (views.size() != frames.size()) Fail("fruit points: ", views.size(), " views but ", frames.size(), " frames");
-  std::vector<FruitPoint> points;
   const int n = static_cast<int>(frames.size());
   std::vector<BlobCentres> centres;
   for (const auto& f : frames) centres.emplace_back(f);
+  std::vector<std::vector<FruitPointCandidate>> per_blob;  // every blob of every frame, in order
   for (int i = 0; i < n; ++i) {
     const double tol = o.max_error_fraction * views[i].width;
     for (const Blob& blob : frames[i].blobs) {
       const Eigen::Vector2d pi = Centre(frames[i], blob);
       const Eigen::Vector3d hi(pi.x(), pi.y(), 1);
-      bool found = false;
-      FruitPoint best;
-      double best_error = 0;
+      std::vector<FruitPointCandidate>& candidates = per_blob.emplace_back();
       for (int j = i + o.min_partner_offset; j <= std::min(n - 1, i + o.max_partner_offset); ++j) {
         const Eigen::Matrix3d F = Fundamental(views[i], views[j]);
         const Eigen::Vector3d line = F * hi;
@@ -348,17 +408,12 @@ std::vector<FruitPoint> TriangulateFruitPoints(const std::vector<CameraView>& vi
           double error = 0;
           for (const auto& [f, id] : s.blobs) error += ReprojectionError(views[f], X, Centre(frames[f], *frames[f].FindBlob(id)));
           error /= s.hits;
-          if (!found || s.hits > best.support || (s.hits == best.support && error < best_error)) {
-            found = true;
-            best = {X, i, blob.id, s.hits};
-            best_error = error;
-          }
+          candidates.push_back({{X, i, blob.id, s.hits}, s.in_image, std::move(s.blobs), error});
         }
       }
-      if (found) points.push_back(best);
     }
   }
-  return points;
+  return ChooseFruitPoints(std::move(per_blob), o);
 }
 
 }  // namespace orchard

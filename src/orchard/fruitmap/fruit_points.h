@@ -66,6 +66,14 @@ struct FruitPointOptions {
   // Depth range in front of the cameras (scene units: metres once scaled).
   double min_depth = 0.3;
   double max_depth = 15;
+  // Explaining away (0 = off: each blob keeps its best pairing): pairings are
+  // taken strongest first over all blobs; a pairing's hits on blobs that a
+  // stronger kept point more than this far (scene units) from it already
+  // lands on do not count for its support, a blob so explained keeps no
+  // point of its own, and a blob whose best pairing then fails falls back to
+  // its next best. Why: a chance pairing near the camera, or a second track
+  // of a partly hidden apple, lands on blobs another apple's point explains.
+  double explain_distance = 0;
   void Check() const;
 };
 
@@ -123,6 +131,23 @@ bool ProjectNearFrame(const CameraView& view, const Eigen::Vector3d& X, const Fr
 // BlobCentres(frame).Near(view, X, options), for a single lookup.
 int BlobNearPoint(const CameraView& view, const FruitFrame& frame, const Eigen::Vector3d& X,
                   const FruitPointOptions& options);
+
+// One accepted pairing of a blob, refined: its point, the frames around it
+// it falls into, the (frame, blob id) it lands on, and its mean
+// reprojection error (pixels).
+struct FruitPointCandidate {
+  FruitPoint point;  // point.support = hits.size()
+  int in_image = 0;
+  std::vector<std::pair<int, int>> hits;
+  double error = 0;
+};
+
+// The fruit points from every blob's candidates (`per_blob[b]`, any order):
+// each blob's strongest (most hits, then least error), or with
+// options.explain_distance > 0 the explaining-away choice described there.
+// Points come in blob order.
+std::vector<FruitPoint> ChooseFruitPoints(std::vector<std::vector<FruitPointCandidate>> per_blob,
+                                          const FruitPointOptions& options);
 
 // `views[i]` and `frames[i]` are the same frame; frames are in sequence order.
 std::vector<FruitPoint> TriangulateFruitPoints(const std::vector<CameraView>& views,

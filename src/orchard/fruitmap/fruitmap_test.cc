@@ -426,6 +426,59 @@ TEST(BlobNearPoint, ASmallPieceOfAHiddenAppleSupportsItsCentre) {
   EXPECT_THROW(o.Check(), Error);
 }
 
+FruitPointCandidate CandidateAt(const Eigen::Vector3d& x, int frame, int blob, std::vector<std::pair<int, int>> hits,
+                                int in_image) {
+  FruitPointCandidate c;
+  c.point = {x, frame, blob, static_cast<int>(hits.size())};
+  c.in_image = in_image;
+  c.hits = std::move(hits);
+  c.error = 0.5;
+  return c;
+}
+
+TEST(ChooseFruitPoints, AChancePairingOnAnotherApplesBlobsGivesWayToTheBlobsNextBest) {
+  // Apple A is blob 1 in frames 0-5, apple B blob 2 in frames 2-5.
+  const Eigen::Vector3d a(0, 0, 1.5), b(0.3, 0, 1.5);
+  std::vector<std::vector<FruitPointCandidate>> per_blob(4);
+  per_blob[0] = {CandidateAt(a, 0, 1, {{0, 1}, {1, 1}, {2, 1}, {3, 1}, {4, 1}, {5, 1}}, 6)};
+  // B's blob in frame 3: its best pairing is a chance point near the camera
+  // that lands on A's blobs in four frames; its next best is B.
+  const Eigen::Vector3d chance(0.15, -1.2, 1.5);
+  per_blob[1] = {CandidateAt(b, 3, 2, {{2, 2}, {3, 2}, {4, 2}, {5, 2}}, 6),
+                 CandidateAt(chance, 3, 2, {{0, 1}, {1, 1}, {2, 1}, {3, 2}, {4, 1}}, 8)};
+  // A's blob in frame 2 paired 3 cm from A: agrees with A, kept.
+  const Eigen::Vector3d near_a = a + Eigen::Vector3d(0.03, 0, 0);
+  per_blob[2] = {CandidateAt(near_a, 2, 1, {{1, 1}, {2, 1}, {3, 1}}, 4)};
+  // A's blob in frame 4 paired 20 cm off, with three hits of its own: A
+  // explains the blob it starts from, so it keeps no point.
+  const Eigen::Vector3d ghost = a + Eigen::Vector3d(0, 0.2, 0);
+  per_blob[3] = {CandidateAt(ghost, 4, 1, {{4, 1}, {5, 3}, {6, 3}, {7, 3}}, 5)};
+
+  FruitPointOptions o;  // off: each blob's strongest
+  std::vector<FruitPoint> points = ChooseFruitPoints(per_blob, o);
+  ASSERT_EQ(points.size(), 4u);
+  EXPECT_TRUE(points[1].xyz.isApprox(chance));
+  EXPECT_EQ(points[1].support, 5);
+  EXPECT_TRUE(points[3].xyz.isApprox(ghost));
+
+  o.explain_distance = 0.06;
+  points = ChooseFruitPoints(per_blob, o);
+  ASSERT_EQ(points.size(), 3u);
+  EXPECT_TRUE(points[0].xyz.isApprox(a));
+  EXPECT_TRUE(points[1].xyz.isApprox(b));
+  EXPECT_EQ(points[1].frame, 3);
+  EXPECT_TRUE(points[2].xyz.isApprox(near_a));
+
+  // Closer than 3 cm counts as another apple: the near pairing goes too.
+  o.explain_distance = 0.02;
+  points = ChooseFruitPoints(per_blob, o);
+  ASSERT_EQ(points.size(), 2u);
+  EXPECT_TRUE(points[1].xyz.isApprox(b));
+
+  o.explain_distance = -1;
+  EXPECT_THROW(ChooseFruitPoints(per_blob, o), Error);
+}
+
 // A blob as the side stage makes it from a label image.
 Blob BlobOf(const cv::Mat1i& labels, int id) {
   const cv::Mat1b mask = labels == id;
