@@ -50,7 +50,7 @@ void AddSideOptions(CLI::App* cmd, SideOptions* options) {
       ->capture_default_str();
   cmd->add_option("--explain-distance", o.clusters.points.explain_distance,
                   "Take pairings strongest first; hits on blobs a kept point farther than this (m) lands on do not "
-                  "count (0 = off: each blob's best pairing)")
+                  "count (0 = off: each blob keeps its best pairing)")
       ->capture_default_str();
   cmd->add_option("--support-window", o.clusters.points.support_window, "Frames either side checked for support")
       ->capture_default_str();

@@ -73,7 +73,9 @@ struct FruitPointOptions {
   // point of its own, and a blob whose best pairing then fails falls back to
   // its next best. Why: a chance pairing near the camera, or a second track
   // of a partly hidden apple, lands on blobs another apple's point explains.
-  double explain_distance = 0;
+  // 6 cm: an apple's own pairings lie closer (fresh sides within 3%: 43 -> 48
+  // of 52; docs/side.md, "Explaining away").
+  double explain_distance = 0.06;
   void Check() const;
 };
 

@@ -454,14 +454,16 @@ TEST(ChooseFruitPoints, AChancePairingOnAnotherApplesBlobsGivesWayToTheBlobsNext
   const Eigen::Vector3d ghost = a + Eigen::Vector3d(0, 0.2, 0);
   per_blob[3] = {CandidateAt(ghost, 4, 1, {{4, 1}, {5, 3}, {6, 3}, {7, 3}}, 5)};
 
-  FruitPointOptions o;  // off: each blob's strongest
+  FruitPointOptions o;
+  o.explain_distance = 0;  // off: each blob's strongest
   std::vector<FruitPoint> points = ChooseFruitPoints(per_blob, o);
   ASSERT_EQ(points.size(), 4u);
   EXPECT_TRUE(points[1].xyz.isApprox(chance));
   EXPECT_EQ(points[1].support, 5);
   EXPECT_TRUE(points[3].xyz.isApprox(ghost));
 
-  o.explain_distance = 0.06;
+  o.explain_distance = FruitPointOptions().explain_distance;  // the default, 6 cm
+  ASSERT_DOUBLE_EQ(o.explain_distance, 0.06);
   points = ChooseFruitPoints(per_blob, o);
   ASSERT_EQ(points.size(), 3u);
   EXPECT_TRUE(points[0].xyz.isApprox(a));
