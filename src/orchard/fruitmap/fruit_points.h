@@ -73,8 +73,8 @@ struct FruitPointOptions {
   // point of its own, and a blob whose best pairing then fails falls back to
   // its next best. Why: a chance pairing near the camera, or a second track
   // of a partly hidden apple, lands on blobs another apple's point explains.
-  // 6 cm: an apple's own pairings lie closer (fresh sides within 3%: 43 -> 48
-  // of 52; docs/side.md, "Explaining away").
+  // 6 cm: the best of 4-10 cm on the development rows (fresh sides within
+  // 3%: 43 -> 48 of 52; docs/side.md, "Explaining away").
   double explain_distance = 0.06;
   void Check() const;
 };

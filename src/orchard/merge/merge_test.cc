@@ -229,15 +229,15 @@ TEST(RegistrationTest, FailsWithTooFewClusters) {
   EXPECT_THROW(RegisterSides(front, back, RegistrationOptions()), Error);
 }
 
+// Four trees 1.25 m apart. (A function, not a braced default member: GCC 12
+// wrongly warns of a dangling pointer where that default is inlined.)
+std::vector<double> FourTrees() { return {0, 1.25, 2.5, 3.75}; }
+
 // A row seen by COLMAP from both sides, in the front row frame: trees 1 m
 // wide at `trees` (x centres), canopy 1.2 m thick centred 2.5 m from the
 // front path, 0.6..3 m high; each side's sparse points are leaves between its
 // face and the centre plane, and ground over the stretch it films
 // (`seen_*`, x range); apples near each face, `shared` of them seen from both.
-// Four trees 1.25 m apart. (A function, not a braced default member: GCC 12
-// wrongly warns of a dangling pointer where that default is inlined.)
-std::vector<double> FourTrees() { return {0, 1.25, 2.5, 3.75}; }
-
 struct RowScene {
   std::vector<double> trees = FourTrees();
   double seen_front_lo = -2, seen_front_hi = 5.75, seen_back_lo = -2, seen_back_hi = 5.75;
