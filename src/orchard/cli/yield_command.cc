@@ -37,7 +37,8 @@ void AddYieldCommand(CLI::App& app) {
                 "The given poses of both sides are in one frame (RTK-GNSS, one SLAM run): skip the registration");
   cmd->add_option("--truth", a->truth,
                   "Ground truth json (the generator's truth.json) to compare against; with the generator's side "
-                  "folders beside it each side is scored too (yield.json sides.<side>.truth, OUT/<side>/truth_clusters.csv)");
+                  "folders beside it each side is scored too (yield.json sides.<side>.truth, OUT/<side>/truth_clusters.csv) "
+                  "and the merged count taken apart (yield.json truth.merge)");
   cmd->add_option("--calibration", a->calibration,
                   "Calibration from harvested rows (orchard calibrate): also report the calibrated total");
   cmd->add_option("--match-distance", o.registration.match_distance,

@@ -747,9 +747,12 @@ void WriteTruthClusters(const fs::path& path, const ClusterResult& result, const
 
 // The side's kept clusters scored against the generator's truth in `truth`
 // (S/front or S/back), for side.json (logged in one line) and
-// OUT/truth_clusters.csv.
+// OUT/truth_clusters.csv; the clusters kept for the merge (`merge`, the same
+// as `result` when the side has one set of rules) also, for `orchard yield`
+// to take the merged count apart: OUT/truth_merge_clusters.json, each
+// cluster id (clusters.csv) with the apples it was credited with.
 Json ScoreAgainstTruth(const fs::path& truth, const std::vector<CameraView>& views, const ClusterResult& result,
-                       const fs::path& out) {
+                       const ClusterResult& merge, const fs::path& out) {
   const fs::path dir = TruthFolder(truth);
   const std::set<int> visible = TruthVisibleApples(dir);
   MaskFinder finder(dir / "masks");
@@ -761,6 +764,18 @@ Json ScoreAgainstTruth(const fs::path& truth, const std::vector<CameraView>& vie
   }
   const SideTruthScore t = ScoreSideAgainstTruth(views, masks, visible, result);
   WriteTruthClusters(out / "truth_clusters.csv", result, t);
+  {
+    const SideTruthScore m = &merge == &result ? t : ScoreSideAgainstTruth(views, masks, visible, merge);
+    Json credited = Json::object(), role = Json::object(), top_apple = Json::object();
+    for (const ClusterTruth& c : m.clusters) {
+      const std::string id = std::to_string(merge.clusters[c.cluster].id);
+      credited[id] = c.credited, role[id] = c.role, top_apple[id] = c.top_apple;
+    }
+    WriteTextFileAtomic(out / "truth_merge_clusters.json",
+                        Json{{"credited", credited}, {"role", role}, {"top_apple", top_apple}, {"found", m.found},
+                             {"duplicates", m.duplicates},
+                             {"over_counted", m.over_counted}, {"not_visible", m.not_visible}}.dump() + "\n");
+  }
   const int glimpsed = t.visible_by_views_seen[0] + t.visible_by_views_seen[1] + t.visible_by_views_seen[2];
   const int glimpsed_missed = t.missed_by_views_seen[0] + t.missed_by_views_seen[1] + t.missed_by_views_seen[2];
   spdlog::info("truth: {} counted for {} visible ({:+.1f}%): {} found, {} missed ({} of the {} seen in at most two "
@@ -975,7 +990,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   }
   Json truth_json;
   if (!in.truth.empty())
-    truth_json = ScoreAgainstTruth(in.truth, views, one_side_result ? *one_side_result : r, in.out);
+    truth_json = ScoreAgainstTruth(in.truth, views, one_side_result ? *one_side_result : r, r, in.out);
   s.clusters_s = stopwatch.Lap();
   WriteOutputs(in.out, image_paths, frames, r, o);
   s.outputs_s = stopwatch.Lap();

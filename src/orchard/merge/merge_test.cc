@@ -13,6 +13,7 @@
 #include "orchard/core/file_io.h"
 #include "orchard/merge/registration.h"
 #include "orchard/merge/row_registration.h"
+#include "orchard/merge/merge_truth.h"
 #include "orchard/merge/shared_count.h"
 #include "orchard/merge/side_cloud.h"
 #include "orchard/merge/yield.h"
@@ -524,6 +525,43 @@ TEST(SharedCountTest, LinkedClustersShareTheSmallerSidesApples) {
   const std::vector<SideCluster> apart = {Cluster(1, 1, {a + Eigen::Vector3d(0.12, 0, 0)})};
   EXPECT_EQ(CountSharedApples(front, apart, SharedCountOptions()).total, 2);
   EXPECT_THROW(CountSharedApples(front, back, SharedCountOptions{-1}), Error);
+}
+
+TEST(MergeTruthTest, TakesTheMergedCountApart) {
+  // Visible: front 0-5, back 3-8 (3, 4, 5 from both sides), 9 apples in all.
+  const Eigen::Vector3d a(0, 2.5, 1.5), dx(0.5, 0, 0), e(0.02, 0, 0);
+  const std::vector<SideCluster> front = {
+      Cluster(1, 1, {a}),           // holds 3, linked with back 1 which holds 3
+      Cluster(2, 2, {a + dx}),      // holds 4 and 0, linked with back 2 which holds 5: a chance link
+      Cluster(3, 1, {a + 2 * dx}),  // holds 5 too, linked to nothing: counted twice
+      Cluster(4, 2, {a + 3 * dx}),  // holds 1, counted one above it
+      Cluster(5, 1, {a + 4 * dx}),  // on no visible apple
+  };
+  const std::vector<SideCluster> back = {
+      Cluster(1, 1, {a + e}),
+      Cluster(2, 1, {a + dx + e}),
+      Cluster(3, 1, {a + 5 * dx}),  // holds 6
+  };
+  const SharedCount s = CountSharedApples(front, back, SharedCountOptions());
+  ASSERT_EQ(s.total, 7 + 3 - 2);
+  const std::map<int, std::vector<int>> front_credited = {{1, {3}}, {2, {0, 4}}, {3, {5}}, {4, {1}}};
+  const std::map<int, std::vector<int>> back_credited = {{1, {3}}, {2, {5}}, {3, {6}}};
+  const MergeTruth t = ScoreMergeAgainstTruth(front, back, s, front_credited, back_credited, {0, 1, 2, 3, 4, 5},
+                                              {3, 4, 5, 6, 7, 8});
+  EXPECT_EQ(t.visible_any, 9);
+  EXPECT_EQ(t.visible_both, 3);
+  EXPECT_EQ(t.held_front, 5);
+  EXPECT_EQ(t.held_back, 3);
+  EXPECT_EQ(t.extra_front, 2);  // front 4's second apple, front 5
+  EXPECT_EQ(t.extra_back, 0);
+  EXPECT_EQ(t.held_by_neither, 3);  // 2, 7, 8
+  EXPECT_EQ(t.held_both, 2);        // 3 and 5
+  EXPECT_EQ(t.linked, 1);           // 3
+  EXPECT_EQ(t.unlinked, 1);         // 5: front 3 and back 2 are not linked
+  EXPECT_DOUBLE_EQ(t.shared, 2.0);
+  // The terms add up to the merged count's error.
+  EXPECT_EQ(t.total - t.visible_any,
+            t.extra_front + t.extra_back - t.held_by_neither + t.unlinked + t.linked - static_cast<int>(t.shared));
 }
 
 TEST(SharedCountTest, TheIntersectionDistanceGrowsWithTheRegistrationResidual) {

@@ -79,6 +79,36 @@ std::string SideTruthTable(const nlohmann::json& y) {
   return h.str();
 }
 
+// The merged count taken apart against the generator's truth (truth.merge,
+// when both sides were scored); empty otherwise.
+std::string MergeTruthTable(const nlohmann::json& y) {
+  if (!y.contains("truth") || !y.at("truth").contains("merge")) return "";
+  const nlohmann::json& m = y.at("truth").at("merge");
+  const int visible = m.value("visible_any", 0), total = y.value("total", 0);
+  const double shared = m.value("shared", 0.0);
+  const int linked = m.value("linked", 0);
+  std::ostringstream h;
+  h << "<h2>Where the merged count comes from</h2>\n<p>The clusters each side keeps for the merge, credited with the "
+       "visible apples their fruit points land on. The merged count's error is the sum of the signed terms.</p>\n"
+       "<table><tr><th></th><th>apples</th></tr>\n";
+  const auto row = [&](const std::string& label, const std::string& value) {
+    h << "<tr><td>" << Escape(label) << "</td><td>" << value << "</td></tr>\n";
+  };
+  const auto signed_number = [](double v) { return (v >= 0 ? "+" : "") + Num(v, 0); };
+  row("visible from either side (from both)",
+      std::to_string(visible) + " (" + std::to_string(m.value("visible_both", 0)) + ")");
+  row("merged count", std::to_string(total) + " (" + signed_number(total - visible) + ")");
+  row("front clusters counted above the apples they hold", signed_number(m.value("extra_front", 0)));
+  row("back clusters counted above the apples they hold", signed_number(m.value("extra_back", 0)));
+  row("apples held by neither side", signed_number(-m.value("held_by_neither", 0)));
+  row("apples both sides hold in clusters not linked (counted twice)", signed_number(m.value("unlinked", 0)));
+  row("apples both sides hold in linked clusters (" + std::to_string(linked) + ") less those counted once (" +
+          Num(shared, 0) + ")",
+      signed_number(linked - shared));
+  h << "</table>\n";
+  return h.str();
+}
+
 // Apples along the row (x) and by height (y), and the per-metre bars below.
 std::string MapSvg(const nlohmann::json& y, const std::vector<MapCluster>& clusters) {
   double x0 = 0, x1 = 1, h1 = 3;
@@ -175,7 +205,7 @@ std::string YieldReportHtml(const nlohmann::json& y, const std::vector<MapCluste
     row("truth: visible from both sides", t.value("visible_both", 0.0));
   }
   h << "</table>\n";
-  h << SideTruthTable(y);
+  h << SideTruthTable(y) << MergeTruthTable(y);
   for (const auto& w : y.at("warnings")) h << "<p class='warn'>Warning: " << Escape(w.get<std::string>()) << "</p>\n";
   if (y.contains("sides")) {  // where each side's camera poses came from
     std::string poses;

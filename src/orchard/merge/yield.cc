@@ -13,7 +13,9 @@
 #include "orchard/core/file_io.h"
 #include "orchard/core/frame_source.h"
 #include "orchard/core/stopwatch.h"
+#include "orchard/fruitmap/truth_score.h"
 #include "orchard/merge/calibration.h"
+#include "orchard/merge/merge_truth.h"
 #include "orchard/merge/report.h"
 #include "orchard/merge/side_cloud.h"
 
@@ -56,6 +58,59 @@ Json SideJson(const SideSummary& s, const SideCloud& cloud, const SideInputs& in
     if (!side.is_discarded() && side.contains("truth")) j["truth"] = side.at("truth");
   }
   return j;
+}
+
+// A side's merge clusters scored against the truth (side output
+// truth_merge_clusters.json): the apples each holds, by cluster id.
+Json ReadMergeClustersTruth(const SideInputs& side) {
+  const fs::path path = side.out / "truth_merge_clusters.json";
+  const Json j = Json::parse(ReadTextFile(path), nullptr, false);
+  if (j.is_discarded() || !j.contains("credited")) Fail("truth: ", path.string(), " is not a merge clusters' truth file");
+  return j;
+}
+
+std::map<int, std::vector<int>> Credited(const Json& merge_clusters_truth) {
+  std::map<int, std::vector<int>> credited;
+  for (const auto& [id, apples] : merge_clusters_truth.at("credited").items())
+    credited[std::stoi(id)] = apples.get<std::vector<int>>();
+  return credited;
+}
+
+// The merged count taken apart against the truth (merge_truth.h), logged in one line.
+Json MergeTruthJson(const SideInputs& front, const SideInputs& back, const std::vector<SideCluster>& front_clusters,
+                    const std::vector<SideCluster>& back_clusters, const SharedCount& shared) {
+  const auto visible = [](const SideInputs& side) {
+    const fs::path dir = side.truth.filename().empty() ? side.truth.parent_path() : side.truth;
+    return ReadVisibleApples(dir.parent_path() / "apples.csv", dir.filename().string());
+  };
+  const Json front_truth = ReadMergeClustersTruth(front), back_truth = ReadMergeClustersTruth(back);
+  const MergeTruth t = ScoreMergeAgainstTruth(front_clusters, back_clusters, shared, Credited(front_truth),
+                                              Credited(back_truth), visible(front), visible(back));
+  // What each side's extra is made of, in the side's own terms (truth_score.h).
+  const auto extra_parts = [](const Json& side) {
+    Json parts = Json::object();
+    for (const char* k : {"duplicates", "over_counted", "not_visible"}) parts[k] = side.value(k, 0);
+    return parts;
+  };
+  spdlog::info("truth: merged {} for {} visible: clusters above their apples +{} front, +{} back; held by neither -{}; "
+               "held by both sides {} ({} linked, {} not: counted twice), counted once {:.0f}",
+               t.total, t.visible_any, t.extra_front, t.extra_back, t.held_by_neither, t.held_both, t.linked,
+               t.unlinked, t.shared);
+  return {{"visible_any", t.visible_any},
+          {"visible_both", t.visible_both},
+          {"held_front", t.held_front},
+          {"held_back", t.held_back},
+          {"held_both", t.held_both},
+          {"held_by_neither", t.held_by_neither},
+          {"linked", t.linked},
+          {"unlinked", t.unlinked},
+          {"extra_front", t.extra_front},
+          {"extra_back", t.extra_back},
+          {"extra_front_parts", extra_parts(front_truth)},
+          {"extra_back_parts", extra_parts(back_truth)},
+          {"shared", t.shared},
+          {"note", "total - visible_any = extra_front + extra_back - held_by_neither + unlinked + (linked - shared): "
+                   "the sides' merge clusters scored against the generator's masks"}};
 }
 
 Json AlignmentJson(const Registration& r, const std::string& method) {
@@ -419,6 +474,8 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
       truth["total_percent_of_visible_any"] = 100.0 * y.total / visible;
       truth["sum_of_sides_percent_of_visible_any"] = 100.0 * y.sum_of_sides / visible;
     }
+    if (!front.truth.empty() && !back.truth.empty()) truth["merge"] = MergeTruthJson(front, back, front_cloud.clusters,
+                                                                                   back_in_front, shared);
     j["truth"] = truth;
   }
 

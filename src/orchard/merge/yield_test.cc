@@ -126,8 +126,16 @@ TEST_F(YieldTest, MergesBothSidesAndResumes) {
   const auto js = nlohmann::json::parse(ReadTextFile(*dir_ / "out/yield.json"));
   EXPECT_EQ(js.at("sides").at("front").at("truth").at("visible").get<int>(), visible_front);
   EXPECT_EQ(js.at("sides").at("back").at("truth").at("count").get<int>(), y.back);
+  // ... and where the merged count comes from: the terms add up to its error.
+  const auto& m = js.at("truth").at("merge");
+  EXPECT_EQ(m.at("visible_any").get<int>(), visible_any);
+  EXPECT_EQ(y.total - visible_any, m.at("extra_front").get<int>() + m.at("extra_back").get<int>() -
+                                       m.at("held_by_neither").get<int>() + m.at("unlinked").get<int>() +
+                                       m.at("linked").get<int>() - static_cast<int>(m.at("shared").get<double>()));
+  EXPECT_GT(m.at("linked").get<int>(), 0);
   const std::string report = ReadTextFile(*dir_ / "out/report.html");
   EXPECT_NE(report.find("Where each side's count comes from"), std::string::npos);
+  EXPECT_NE(report.find("Where the merged count comes from"), std::string::npos);
   EXPECT_NE(report.find("<td>apples visible from the side</td><td>" + std::to_string(visible_front) + "</td><td>" +
                         std::to_string(visible_back) + "</td>"),
             std::string::npos);
