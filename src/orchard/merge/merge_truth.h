@@ -2,7 +2,8 @@
 // truth: each side's clusters kept for the merge are credited with the
 // visible apples their fruit points land on (ScoreSideAgainstTruth), and the
 // merge's inclusion-exclusion is taken apart into the terms that make
-// total - visible_any (docs/yield.md, "Where a merged row's count comes from"):
+// total - visible_any (docs/yield.md, "Where a merged row's count comes from,
+// exactly"):
 //   total - visible_any = extra_front + extra_back - held_by_neither
 //                         + unlinked + (linked - shared)
 // extra_<side>: the side's merge clusters' counts above the apples they hold
