@@ -707,16 +707,6 @@ ColmapModel ReconstructSide(const fs::path& image_dir, const SideInputs& in, con
   return std::move(models.at(best));
 }
 
-// The truth folder without a trailing separator ("S/front/" -> "S/front").
-fs::path TruthFolder(fs::path dir) { return dir.filename().empty() ? dir.parent_path() : dir; }
-
-// The apples `dir` (a side's folder of the generator) has visible; fails with
-// a message when it is not such a folder.
-std::set<int> TruthVisibleApples(const fs::path& dir) {
-  if (!fs::is_directory(dir / "masks")) Fail("truth: ", dir.string(), " has no masks/ (give the generator's S/front or S/back)");
-  return ReadVisibleApples(dir.parent_path() / "apples.csv", dir.filename().string());
-}
-
 // Each scored cluster's part in the breakdown, one row per kept cluster of
 // `result`: for a duplicate, the cluster that holds its apple and how far
 // apart the two lie (where the next rule against duplicates has to look).
@@ -753,13 +743,13 @@ void WriteTruthClusters(const fs::path& path, const ClusterResult& result, const
 // cluster id (clusters.csv) with the apples it was credited with.
 Json ScoreAgainstTruth(const fs::path& truth, const std::vector<CameraView>& views, const ClusterResult& result,
                        const ClusterResult& merge, const fs::path& out) {
-  const fs::path dir = TruthFolder(truth);
-  const std::set<int> visible = TruthVisibleApples(dir);
-  MaskFinder finder(dir / "masks");
+  const std::set<int> visible = ReadSideVisibleApples(truth);
+  const fs::path masks_dir = truth / "masks";
+  MaskFinder finder(masks_dir);
   std::vector<cv::Mat> masks;
   for (const auto& v : views) {
     const fs::path path = finder.Find(fs::path(v.name).stem().string());
-    if (!fs::exists(path)) Fail("truth: no mask for frame ", v.name, " in ", (dir / "masks").string());
+    if (!fs::exists(path)) Fail("truth: no mask for frame ", v.name, " in ", masks_dir.string());
     masks.push_back(ReadImage(path, cv::IMREAD_UNCHANGED));
   }
   const SideTruthScore t = ScoreSideAgainstTruth(views, masks, visible, result);
@@ -782,7 +772,8 @@ Json ScoreAgainstTruth(const fs::path& truth, const std::vector<CameraView>& vie
                "views); {} counted twice, {} above a cluster's apples, {} on no visible apple",
                t.count, t.visible, t.visible ? 100.0 * (t.count - t.visible) / t.visible : 0.0, t.found, t.missed,
                glimpsed_missed, glimpsed, t.duplicates, t.over_counted, t.not_visible);
-  return Json{{"apples", (dir.parent_path() / "apples.csv").string()}, {"visible", t.visible}, {"count", t.count},
+  // masks_dir is S/front/masks (or S/back/masks), whatever separator `truth` ended in.
+  return Json{{"apples", (masks_dir.parent_path().parent_path() / "apples.csv").string()}, {"visible", t.visible}, {"count", t.count},
               {"found", t.found}, {"missed", t.missed}, {"missed_without_points", t.missed_without_points},
               {"missed_ids", t.missed_ids}, {"visible_by_views_seen", t.visible_by_views_seen},
               {"missed_by_views_seen", t.missed_by_views_seen}, {"duplicates", t.duplicates},
@@ -797,7 +788,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   if (!fs::exists(in.input)) Fail("input ", in.input.string(), " does not exist");
   if (!in.detector && in.masks.empty()) Fail("give a detector or a folder of instance masks");
   if (!in.detector && !fs::is_directory(in.masks)) Fail("masks folder ", in.masks.string(), " does not exist");
-  if (!in.truth.empty()) TruthVisibleApples(TruthFolder(in.truth));  // a wrong folder fails now, not after the count
+  if (!in.truth.empty()) ReadSideVisibleApples(in.truth);  // a wrong folder fails now, not after the count
   fs::create_directories(in.out);
   Stopwatch stopwatch;
   SideSummary s;

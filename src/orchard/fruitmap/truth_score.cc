@@ -156,4 +156,10 @@ std::set<int> ReadVisibleApples(const fs::path& apples_csv, const std::string& s
   return visible;
 }
 
+std::set<int> ReadSideVisibleApples(const fs::path& side_dir) {
+  const fs::path dir = side_dir.filename().empty() ? side_dir.parent_path() : side_dir;
+  if (!fs::is_directory(dir / "masks")) Fail("truth: ", dir.string(), " has no masks/ (give the generator's S/front or S/back)");
+  return ReadVisibleApples(dir.parent_path() / "apples.csv", dir.filename().string());
+}
+
 }  // namespace orchard

@@ -84,4 +84,9 @@ SideTruthScore ScoreSideAgainstTruth(const std::vector<CameraView>& views, const
 // (row 0), not on the ground. Fails with a message on a file of another layout.
 std::set<int> ReadVisibleApples(const fs::path& apples_csv, const std::string& side);
 
+// The visible apples of a side folder of the generator's row ("S/front" or
+// "S/back", a trailing separator allowed): ReadVisibleApples on S/apples.csv
+// for that side. Fails with a message when `side_dir` has no masks/.
+std::set<int> ReadSideVisibleApples(const fs::path& side_dir);
+
 }  // namespace orchard

@@ -155,6 +155,13 @@ TEST(ReadVisibleApples, TakesTheFilmedRowsApplesOffTheGroundSeenFromTheSide) {
   EXPECT_THROW(ReadVisibleApples(dir / "other.csv", "front"), Error);
   WriteTextFileAtomic(dir / "short.csv", "id,row,on_ground,visible_front\n0,0,0\n");
   EXPECT_THROW(ReadVisibleApples(dir / "short.csv", "front"), Error);
+  // A side folder of the row, with or without a trailing separator; one
+  // without masks/ is not the generator's side.
+  fs::create_directories(dir / "front" / "masks");
+  fs::create_directories(dir / "back");
+  EXPECT_EQ(ReadSideVisibleApples(dir / "front"), (std::set<int>{0, 4}));
+  EXPECT_EQ(ReadSideVisibleApples(dir / "front" / ""), (std::set<int>{0, 4}));
+  EXPECT_THROW(ReadSideVisibleApples(dir / "back"), Error);
 }
 
 }  // namespace

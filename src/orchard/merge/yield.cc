@@ -79,13 +79,10 @@ std::map<int, std::vector<int>> Credited(const Json& merge_clusters_truth) {
 // The merged count taken apart against the truth (merge_truth.h), logged in one line.
 Json MergeTruthJson(const SideInputs& front, const SideInputs& back, const std::vector<SideCluster>& front_clusters,
                     const std::vector<SideCluster>& back_clusters, const SharedCount& shared) {
-  const auto visible = [](const SideInputs& side) {
-    const fs::path dir = side.truth.filename().empty() ? side.truth.parent_path() : side.truth;
-    return ReadVisibleApples(dir.parent_path() / "apples.csv", dir.filename().string());
-  };
   const Json front_truth = ReadMergeClustersTruth(front), back_truth = ReadMergeClustersTruth(back);
   const MergeTruth t = ScoreMergeAgainstTruth(front_clusters, back_clusters, shared, Credited(front_truth),
-                                              Credited(back_truth), visible(front), visible(back));
+                                              Credited(back_truth), ReadSideVisibleApples(front.truth),
+                                              ReadSideVisibleApples(back.truth));
   // What each side's extra is made of, in the side's own terms (truth_score.h).
   const auto extra_parts = [](const Json& side) {
     Json parts = Json::object();
