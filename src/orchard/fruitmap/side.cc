@@ -735,6 +735,14 @@ void WriteTruthClusters(const fs::path& path, const ClusterResult& result, const
   WriteTextFileAtomic(path, csv.str());
 }
 
+// side.json's frames_reach (also copied into yield.json's sides).
+Json FrameReachJson(const FrameReach& reach, double row_distance) {
+  if (reach.views == 0) return Json();
+  return {{"top_m", reach.top}, {"bottom_m", reach.bottom}, {"at_distance_m", row_distance}, {"views", reach.views},
+          {"note", "heights above the ground where the frames' top and bottom edges meet the row (medians over the "
+                   "frames): apples above top_m are in no frame and not counted"}};
+}
+
 // The side's kept clusters scored against the generator's truth in `truth`
 // (S/front or S/back), for side.json (logged in one line) and
 // OUT/truth_clusters.csv; the clusters kept for the merge (`merge`, the same
@@ -999,6 +1007,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
                (kept_seed >= 0 ? "; seed " + std::to_string(kept_seed) + " kept)" : ")");
   }
   s.frame_paths = image_paths;
+  if (r.row_distance > 0) s.frames_reach = FramesReachAt(views, ground, r.row_origin, r.row_across, r.row_distance);
   std::map<std::string, int> removed;
   for (const auto& c : r.clusters) {
     if (c.status == "kept")
@@ -1043,6 +1052,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
                           {"single_apples", check.single_apples},
                           {"frame_spacing", check.frame_spacing}}},
       {"row_distance", r.row_distance},
+      {"frames_reach", FrameReachJson(s.frames_reach, r.row_distance)},
       {"depth_cutoff", r.depth_cutoff},
       {"depth_cutoff_from", r.depth_cutoff_from_gap ? "gap" : "margin"},
       {"fruit_points", r.points.size()},
@@ -1053,6 +1063,9 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   };
   if (!truth_json.is_null()) j["truth"] = truth_json;
   WriteTextFileAtomic(in.out / "side.json", j.dump(2) + "\n");
+  if (s.frames_reach.views > 0)
+    spdlog::info("the frames reach {:.2f}-{:.2f} m above the ground at the row ({:.2f} m across); apples above are not "
+                 "counted", s.frames_reach.bottom, s.frames_reach.top, r.row_distance);
   spdlog::info("{} apples in {} clusters ({} removed); single-frame sum {}", s.count, s.clusters_kept,
                s.clusters_removed, s.single_frame_sum);
   return s;

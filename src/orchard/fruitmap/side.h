@@ -18,6 +18,7 @@
 #include "orchard/fruitmap/fruit_points.h"
 #include "orchard/sfm/camera_view.h"
 #include "orchard/sfm/colmap_runner.h"
+#include "orchard/sfm/frame_reach.h"
 #include "orchard/sfm/frame_selection.h"
 #include "orchard/sfm/ground_plane.h"
 #include "orchard/sfm/reconstruction_check.h"
@@ -320,6 +321,9 @@ struct SideSummary {
   // fruit per frame (detection and counting, or the cache), the 3D stage,
   // writing the outputs.
   double poses_s = 0, fruit_s = 0, clusters_s = 0, outputs_s = 0;
+  // How high the frames reach at the row's distance (row_distance): apples
+  // above `top` are in no frame (side.json frames_reach).
+  FrameReach frames_reach;
   std::vector<fs::path> frame_paths;  // the frames used, in sequence order
   std::vector<std::string> warnings;  // as in side.json
 };

@@ -1,5 +1,7 @@
 // End to end on a tiny synthetic row: true poses and the generator's masks
 // through the library, count checked against truth.json.
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <numeric>
@@ -73,6 +75,16 @@ TEST_F(SideTest, CountsTheVisibleApplesOnceFromTruePosesAndMasks) {
   EXPECT_NEAR(check.at("apple_radius").get<double>(), 0.043, 0.01);
   // The spacing the 3D stage is tuned to (0.050-0.061 on the 4-tree rows).
   EXPECT_NEAR(check.at("frame_spacing").get<double>(), 0.057, 0.012);
+  // The generator's frames (80 degrees across 960x540 px, 1.5 m up, 5 degrees
+  // down; 0.5 degrees of shake) end this high at the row's distance.
+  const auto reach = side.at("frames_reach");
+  const double distance = side.at("row_distance").get<double>(), deg = M_PI / 180;
+  EXPECT_EQ(reach.at("at_distance_m").get<double>(), distance);
+  EXPECT_EQ(reach.at("views").get<int>(), s.frames_used);
+  const double up = std::atan(270 / (480 / std::tan(40 * deg))) - 5 * deg;
+  EXPECT_NEAR(reach.at("top_m").get<double>(), 1.5 + distance * std::tan(up), 0.03) << distance;
+  const double down = std::atan(270 / (480 / std::tan(40 * deg))) + 5 * deg;
+  EXPECT_NEAR(reach.at("bottom_m").get<double>(), std::max(0.0, 1.5 - distance * std::tan(down)), 0.03) << distance;
   // A rerun resumes from the cached detections and gives the same count.
   EXPECT_TRUE(fs::exists(*dir_ / "out/detections/frame_0000.json"));
   // ... and, given the generator's side folder, says where the count comes from.

@@ -216,6 +216,19 @@ std::string YieldReportHtml(const nlohmann::json& y, const std::vector<MapCluste
                std::to_string(s.value("frames_used", 0)) + " frames used";
     }
     h << "<p>Poses: " << Escape(poses) << ".</p>\n";
+    // What the frames cut off is counted by no method (docs/yield.md).
+    std::string reach;
+    for (const char* side : {"front", "back"}) {
+      if (!y.at("sides").contains(side) || !y.at("sides").at(side).contains("frames_reach")) continue;
+      const nlohmann::json& r = y.at("sides").at(side).at("frames_reach");
+      reach += std::string(reach.empty() ? "" : "; ") + side + " " + Num(r.at("bottom_m").get<double>(), 2) + "-" +
+               Num(r.at("top_m").get<double>(), 2) + " m above the ground at " +
+               Num(r.at("at_distance_m").get<double>(), 2) + " m";
+    }
+    if (!reach.empty())
+      h << "<p>The frames reach the row: " << Escape(reach)
+        << ". Apples hanging above the frames' top edge are in no frame and not counted; where the canopy is taller, "
+           "film with its top in the frame (a taller frame, a higher or level camera).</p>\n";
   }
   h << "<h2>Map</h2>\n" << MapSvg(y, clusters);
   const auto& a = y.at("alignment");

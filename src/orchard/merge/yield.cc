@@ -51,12 +51,13 @@ Json SideJson(const SideSummary& s, const SideCloud& cloud, const SideInputs& in
             {"clusters_kept", s.clusters_kept},
             {"clusters_removed", s.clusters_removed},
             {"clusters_loaded", cloud.clusters.size()}};
-  // A side scored against the generator's truth: where its count comes from
-  // (side.json "truth"), so the report can show it beside the counts.
-  if (!in.truth.empty()) {
-    const Json side = Json::parse(ReadTextFile(in.out / "side.json"), nullptr, false);
-    if (!side.is_discarded() && side.contains("truth")) j["truth"] = side.at("truth");
-  }
+  // How high its frames reach, and, for a side scored against the
+  // generator's truth, where its count comes from (side.json "truth"), so
+  // the report can show them beside the counts.
+  const Json side = Json::parse(ReadTextFile(in.out / "side.json"), nullptr, false);
+  if (!side.is_discarded() && side.contains("frames_reach") && !side.at("frames_reach").is_null())
+    j["frames_reach"] = side.at("frames_reach");
+  if (!in.truth.empty() && !side.is_discarded() && side.contains("truth")) j["truth"] = side.at("truth");
   return j;
 }
 

@@ -102,6 +102,13 @@ TEST_F(YieldTest, MergesBothSidesAndResumes) {
   EXPECT_NE(ReadTextFile(*dir_ / "out/report.html").find("<svg"), std::string::npos);
   EXPECT_EQ(j.at("sides").at("back").at("poses").get<std::string>().rfind("given (", 0), 0u);
   EXPECT_NE(ReadTextFile(*dir_ / "out/report.html").find("Poses: front: given ("), std::string::npos);
+  // How high each side's frames reach, as its side.json says, and in the report.
+  for (const char* side : {"front", "back"}) {
+    const auto own = nlohmann::json::parse(ReadTextFile(*dir_ / "out" / side / "side.json")).at("frames_reach");
+    EXPECT_EQ(j.at("sides").at(side).at("frames_reach"), own) << side;
+    EXPECT_GT(own.at("top_m").get<double>(), 2.0) << side;
+  }
+  EXPECT_NE(ReadTextFile(*dir_ / "out/report.html").find("The frames reach the row: front "), std::string::npos);
   EXPECT_EQ(ReadTextFile(*dir_ / "out/report.html").find("Where each side"), std::string::npos);  // not scored
 
   // Interrupted during the back side: its results and part of its cache are
