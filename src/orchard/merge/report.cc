@@ -117,6 +117,14 @@ std::string MapSvg(const nlohmann::json& y, const std::vector<MapCluster>& clust
     for (const auto& c : clusters) x0 = std::min(x0, c.along), x1 = std::max(x1, c.along), h1 = std::max(h1, c.height);
   }
   for (const auto& b : y.at("per_metre")) x0 = std::min(x0, b.at("from").get<double>()), x1 = std::max(x1, b.at("to").get<double>());
+  // Where each side's frames end at the row: fruit above it is in no frame.
+  std::vector<std::pair<std::string, double>> tops;
+  if (y.contains("sides"))
+    for (const char* side : {"front", "back"})
+      if (y.at("sides").contains(side) && y.at("sides").at(side).contains("frames_reach")) {
+        tops.emplace_back(side, y.at("sides").at(side).at("frames_reach").at("top_m").get<double>());
+        h1 = std::max(h1, tops.back().second);
+      }
   const double width = 900, map_h = 300, bar_h = 120, pad = 40;
   const double sx = (width - 2 * pad) / std::max(x1 - x0, 1e-6), sy = (map_h - 2 * pad) / h1;
   std::ostringstream s;
@@ -127,6 +135,14 @@ std::string MapSvg(const nlohmann::json& y, const std::vector<MapCluster>& clust
     << "' stroke='#7a5' stroke-width='2'/>\n";
   for (int m = 0; m <= static_cast<int>(h1); ++m)
     s << "<text x='4' y='" << map_h - pad - m * sy + 4 << "' font-size='11'>" << m << " m</text>\n";
+  for (size_t i = 0; i < tops.size(); ++i) {
+    const std::string colour = tops[i].first == "front" ? "#2a7" : "#27c";
+    const double ty = map_h - pad - tops[i].second * sy;
+    s << "<line x1='" << pad << "' y1='" << Num(ty) << "' x2='" << width - pad << "' y2='" << Num(ty) << "' stroke='"
+      << colour << "' stroke-dasharray='6,4'/>\n";
+    s << "<text x='" << Num(width - pad - 230) << "' y='" << Num(ty - 3 - 12 * static_cast<double>(i)) << "' font-size='11' fill='"
+      << colour << "'>" << tops[i].first << " frames' top edge at the row</text>\n";
+  }
   for (const auto& c : clusters) {
     const std::string colour = c.shared > 0 ? "#d22" : (c.side == "front" ? "#2a7" : "#27c");
     s << "<circle cx='" << Num(pad + (c.along - x0) * sx) << "' cy='" << Num(map_h - pad - c.height * sy) << "' r='"

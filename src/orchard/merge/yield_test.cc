@@ -109,6 +109,7 @@ TEST_F(YieldTest, MergesBothSidesAndResumes) {
     EXPECT_GT(own.at("top_m").get<double>(), 2.0) << side;
   }
   EXPECT_NE(ReadTextFile(*dir_ / "out/report.html").find("The frames reach the row: front "), std::string::npos);
+  EXPECT_NE(ReadTextFile(*dir_ / "out/report.html").find("back frames' top edge at the row"), std::string::npos);
   EXPECT_EQ(ReadTextFile(*dir_ / "out/report.html").find("Where each side"), std::string::npos);  // not scored
 
   // Interrupted during the back side: its results and part of its cache are
