@@ -238,8 +238,8 @@ std::string YieldReportHtml(const nlohmann::json& y, const std::vector<MapCluste
       if (!y.at("sides").contains(side) || !y.at("sides").at(side).contains("frames_reach")) continue;
       const nlohmann::json& r = y.at("sides").at(side).at("frames_reach");
       reach += std::string(reach.empty() ? "" : "; ") + side + " " + Num(r.at("bottom_m").get<double>(), 2) + "-" +
-               Num(r.at("top_m").get<double>(), 2) + " m above the ground at " +
-               Num(r.at("at_distance_m").get<double>(), 2) + " m";
+               Num(r.at("top_m").get<double>(), 2) + " m above the ground, " +
+               Num(r.at("at_distance_m").get<double>(), 2) + " m from the camera path";
     }
     if (!reach.empty())
       h << "<p>The frames reach the row: " << Escape(reach)
