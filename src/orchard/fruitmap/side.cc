@@ -735,9 +735,9 @@ void WriteTruthClusters(const fs::path& path, const ClusterResult& result, const
   WriteTextFileAtomic(path, csv.str());
 }
 
-// side.json's frames_reach (also copied into yield.json's sides).
+// side.json's frames_reach (also copied into yield.json's sides); side.json
+// leaves it out when no frame's edge reaches the row.
 Json FrameReachJson(const FrameReach& reach, double row_distance) {
-  if (reach.views == 0) return Json();
   return {{"top_m", reach.top}, {"bottom_m", reach.bottom}, {"at_distance_m", row_distance}, {"views", reach.views},
           {"note", "heights above the ground where the frames' top and bottom edges meet the row (medians over the "
                    "frames): apples above top_m are in no frame and not counted"}};
@@ -1052,7 +1052,6 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
                           {"single_apples", check.single_apples},
                           {"frame_spacing", check.frame_spacing}}},
       {"row_distance", r.row_distance},
-      {"frames_reach", FrameReachJson(s.frames_reach, r.row_distance)},
       {"depth_cutoff", r.depth_cutoff},
       {"depth_cutoff_from", r.depth_cutoff_from_gap ? "gap" : "margin"},
       {"fruit_points", r.points.size()},
@@ -1061,6 +1060,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
       {"warnings", warnings},
       {"timings_s", {{"poses", s.poses_s}, {"fruit", s.fruit_s}, {"clusters", s.clusters_s}, {"outputs", s.outputs_s}}},
   };
+  if (s.frames_reach.views > 0) j["frames_reach"] = FrameReachJson(s.frames_reach, r.row_distance);
   if (!truth_json.is_null()) j["truth"] = truth_json;
   WriteTextFileAtomic(in.out / "side.json", j.dump(2) + "\n");
   if (s.frames_reach.views > 0)

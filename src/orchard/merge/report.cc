@@ -30,15 +30,21 @@ std::string Percent(double estimate, double truth) {
   return truth > 0 ? Num(100.0 * estimate / truth) + "%" : "-";
 }
 
+// yield.json's sides.<side>.<key>, front then back, for the sides that have it.
+std::vector<std::pair<std::string, const nlohmann::json*>> SidesWith(const nlohmann::json& y, const char* key) {
+  std::vector<std::pair<std::string, const nlohmann::json*>> sides;
+  if (!y.contains("sides")) return sides;
+  for (const char* side : {"front", "back"})
+    if (y.at("sides").contains(side) && y.at("sides").at(side).contains(key))
+      sides.emplace_back(side, &y.at("sides").at(side).at(key));
+  return sides;
+}
+
 // Each side's count against the generator's truth (sides.<side>.truth, when
 // the sides were scored): the apples found and missed, and the rest of the
 // count; empty when neither side was scored.
 std::string SideTruthTable(const nlohmann::json& y) {
-  if (!y.contains("sides")) return "";
-  std::vector<std::pair<std::string, const nlohmann::json*>> sides;
-  for (const char* side : {"front", "back"})
-    if (y.at("sides").contains(side) && y.at("sides").at(side).contains("truth"))
-      sides.emplace_back(side, &y.at("sides").at(side).at("truth"));
+  const auto sides = SidesWith(y, "truth");
   if (sides.empty()) return "";
   std::ostringstream h;
   h << "<h2>Where each side's count comes from</h2>\n<p>Against the generator's truth: every kept cluster credited "
@@ -119,12 +125,10 @@ std::string MapSvg(const nlohmann::json& y, const std::vector<MapCluster>& clust
   for (const auto& b : y.at("per_metre")) x0 = std::min(x0, b.at("from").get<double>()), x1 = std::max(x1, b.at("to").get<double>());
   // Where each side's frames end at the row: fruit above it is in no frame.
   std::vector<std::pair<std::string, double>> tops;
-  if (y.contains("sides"))
-    for (const char* side : {"front", "back"})
-      if (y.at("sides").contains(side) && y.at("sides").at(side).contains("frames_reach")) {
-        tops.emplace_back(side, y.at("sides").at(side).at("frames_reach").at("top_m").get<double>());
-        h1 = std::max(h1, tops.back().second);
-      }
+  for (const auto& [side, reach] : SidesWith(y, "frames_reach")) {
+    tops.emplace_back(side, reach->at("top_m").get<double>());
+    h1 = std::max(h1, tops.back().second);
+  }
   const double width = 900, map_h = 300, bar_h = 120, pad = 40;
   const double sx = (width - 2 * pad) / std::max(x1 - x0, 1e-6), sy = (map_h - 2 * pad) / h1;
   std::ostringstream s;
@@ -234,13 +238,10 @@ std::string YieldReportHtml(const nlohmann::json& y, const std::vector<MapCluste
     h << "<p>Poses: " << Escape(poses) << ".</p>\n";
     // What the frames cut off is counted by no method (docs/yield.md).
     std::string reach;
-    for (const char* side : {"front", "back"}) {
-      if (!y.at("sides").contains(side) || !y.at("sides").at(side).contains("frames_reach")) continue;
-      const nlohmann::json& r = y.at("sides").at(side).at("frames_reach");
-      reach += std::string(reach.empty() ? "" : "; ") + side + " " + Num(r.at("bottom_m").get<double>(), 2) + "-" +
-               Num(r.at("top_m").get<double>(), 2) + " m above the ground, " +
-               Num(r.at("at_distance_m").get<double>(), 2) + " m from the camera path";
-    }
+    for (const auto& [side, r] : SidesWith(y, "frames_reach"))
+      reach += std::string(reach.empty() ? "" : "; ") + side + " " + Num(r->at("bottom_m").get<double>(), 2) + "-" +
+               Num(r->at("top_m").get<double>(), 2) + " m above the ground, " +
+               Num(r->at("at_distance_m").get<double>(), 2) + " m from the camera path";
     if (!reach.empty())
       h << "<p>The frames reach the row: " << Escape(reach)
         << ". Apples hanging above the frames' top edge are in no frame and not counted; where the canopy is taller, "

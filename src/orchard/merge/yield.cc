@@ -55,8 +55,7 @@ Json SideJson(const SideSummary& s, const SideCloud& cloud, const SideInputs& in
   // generator's truth, where its count comes from (side.json "truth"), so
   // the report can show them beside the counts.
   const Json side = Json::parse(ReadTextFile(in.out / "side.json"), nullptr, false);
-  if (!side.is_discarded() && side.contains("frames_reach") && !side.at("frames_reach").is_null())
-    j["frames_reach"] = side.at("frames_reach");
+  if (!side.is_discarded() && side.contains("frames_reach")) j["frames_reach"] = side.at("frames_reach");
   if (!in.truth.empty() && !side.is_discarded() && side.contains("truth")) j["truth"] = side.at("truth");
   return j;
 }
