@@ -70,6 +70,9 @@ void AddYieldCommand(CLI::App& app) {
   cmd->add_option("--intersection-per-residual", o.intersection_per_residual,
                   "Widen the intersection distance to this many times the registration's residual (0 = fixed)")
       ->capture_default_str();
+  cmd->add_flag("--no-unlinked-sides-rule{false}", o.unlinked_by_sides_rule,
+                "Count merge clusters linked to nothing on the other side in their largest views, like the linked "
+                "ones, not by their side's own best-views rule");
   cmd->add_option("--bin-length", o.bin_length, "Length of the yield map's bins along the row (m)")
       ->capture_default_str();
   AddFruitOptions(cmd, &a->fruit);

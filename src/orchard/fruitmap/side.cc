@@ -358,8 +358,12 @@ ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std
   r.row_origin = mean - ground.normal * ground.SignedDistance(mean);
   std::vector<std::pair<double, double>> tree_distances;  // distance, pixels
   for (auto& c : r.clusters) {
-    c.count = MedianOfBestViews(c.views, o.best_views, &c.count_frames,
-                                o.best_views_by == ClusterOptions::BestViews::kCount);
+    std::vector<int> by_pixels_frames, by_count_frames;
+    c.count_by_pixels = MedianOfBestViews(c.views, o.best_views, &by_pixels_frames, false);
+    c.count_by_count = MedianOfBestViews(c.views, o.best_views, &by_count_frames, true);
+    const bool by_count = o.best_views_by == ClusterOptions::BestViews::kCount;
+    c.count = by_count ? c.count_by_count : c.count_by_pixels;
+    c.count_frames = by_count ? by_count_frames : by_pixels_frames;
     c.height = ground.SignedDistance(c.centre);
     c.distance = across.dot(c.centre - mean);
     c.status = EvidenceStatus(c, o);
@@ -573,7 +577,8 @@ cv::Scalar ClusterColour(int id) {
 void WriteOutputs(const fs::path& out, const std::vector<fs::path>& image_paths, const std::vector<FruitFrame>& frames,
                   const ClusterResult& r, const SideOptions& o) {
   std::ostringstream csv;
-  csv << "id,x,y,z,extent_x,extent_y,extent_z,points,count,status,height,distance,frames,views,votes_won,votes_lost,apple_radius\n";
+  csv << "id,x,y,z,extent_x,extent_y,extent_z,points,count,status,height,distance,frames,views,votes_won,votes_lost,"
+         "apple_radius,count_by_pixels,count_by_count\n";
   csv.precision(4);
   csv << std::fixed;
   for (const auto& c : r.clusters) {
@@ -583,7 +588,8 @@ void WriteOutputs(const fs::path& out, const std::vector<fs::path>& image_paths,
         << c.distance << ',';
     for (size_t i = 0; i < c.count_frames.size(); ++i)
       csv << (i ? ";" : "") << image_paths[c.count_frames[i]].filename().string();
-    csv << ',' << c.views.size() << ',' << c.votes_won << ',' << c.votes_lost << ',' << c.apple_radius_seen << '\n';
+    csv << ',' << c.views.size() << ',' << c.votes_won << ',' << c.votes_lost << ',' << c.apple_radius_seen << ','
+        << c.count_by_pixels << ',' << c.count_by_count << '\n';
   }
   WriteTextFileAtomic(out / "clusters.csv", csv.str());
   std::ostringstream ply;
@@ -748,7 +754,8 @@ Json FrameReachJson(const FrameReach& reach, double row_distance) {
 // OUT/truth_clusters.csv; the clusters kept for the merge (`merge`, the same
 // as `result` when the side has one set of rules) also, for `orchard yield`
 // to take the merged count apart: OUT/truth_merge_clusters.json, each
-// cluster id (clusters.csv) with the apples it was credited with.
+// cluster id (clusters.csv) with the apples it was credited with and its
+// points' votes (the merge credits again with the counts it uses).
 Json ScoreAgainstTruth(const fs::path& truth, const std::vector<CameraView>& views, const ClusterResult& result,
                        const ClusterResult& merge, const fs::path& out) {
   const std::set<int> visible = ReadSideVisibleApples(truth);
@@ -764,13 +771,18 @@ Json ScoreAgainstTruth(const fs::path& truth, const std::vector<CameraView>& vie
   WriteTruthClusters(out / "truth_clusters.csv", result, t);
   {
     const SideTruthScore m = &merge == &result ? t : ScoreSideAgainstTruth(views, masks, visible, merge);
-    Json credited = Json::object(), role = Json::object(), top_apple = Json::object();
+    Json credited = Json::object(), role = Json::object(), top_apple = Json::object(), votes = Json::object();
     for (const ClusterTruth& c : m.clusters) {
       const std::string id = std::to_string(merge.clusters[c.cluster].id);
       credited[id] = c.credited, role[id] = c.role, top_apple[id] = c.top_apple;
+      // Apple ids as keys: JSON's keys are strings.
+      Json v = Json::object();
+      for (const auto& [apple, n] : c.votes) v[std::to_string(apple)] = n;
+      votes[id] = v;
     }
     WriteTextFileAtomic(out / "truth_merge_clusters.json",
-                        Json{{"credited", credited}, {"role", role}, {"top_apple", top_apple}, {"found", m.found},
+                        Json{{"credited", credited}, {"role", role}, {"top_apple", top_apple}, {"votes", votes},
+                             {"min_votes", TruthScoreOptions().min_votes}, {"found", m.found},
                              {"duplicates", m.duplicates},
                              {"over_counted", m.over_counted}, {"not_visible", m.not_visible}}.dump() + "\n");
   }

@@ -161,6 +161,10 @@ struct FruitCluster {
   // centre's depth in that frame.
   double apple_radius_seen = 0;
   int count = 0;
+  // The count under each best-views rule (ClusterOptions::BestViews; count is
+  // the one the options chose): the merge counts a cluster the other side
+  // does not link by the side's own rule (YieldOptions::unlinked_by_sides_rule).
+  int count_by_pixels = 0, count_by_count = 0;
   double height = 0;    // centre above the ground (m)
   double distance = 0;  // centre from the camera path, across the row (m)
   // kept, too_few_points, no_views, few_views, ghost, small, fallen, next_row, too_near

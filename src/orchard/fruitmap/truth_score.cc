@@ -35,6 +35,52 @@ int AppleAt(const cv::Mat& mask, const Eigen::Vector2d& pixel, int half) {
 
 }  // namespace
 
+SideTruthScore CreditApples(const std::vector<ClusterVotes>& clusters, const std::set<int>& visible, int min_votes) {
+  SideTruthScore s;
+  s.visible = static_cast<int>(visible.size());
+  // Pairs by votes, most first; ties by cluster then apple, so the result
+  // does not depend on the map's order.
+  std::vector<std::tuple<int, int, int>> pairs;  // (-votes, cluster, apple)
+  for (size_t k = 0; k < clusters.size(); ++k) {
+    s.count += clusters[k].count;
+    for (const auto& [apple, n] : clusters[k].votes)
+      if (n >= min_votes && visible.count(apple)) pairs.emplace_back(-n, static_cast<int>(k), apple);
+  }
+  std::sort(pairs.begin(), pairs.end());
+  s.clusters.resize(clusters.size());
+  std::set<int> found;
+  for (const auto& [neg_votes, k, apple] : pairs) {
+    ClusterTruth& c = s.clusters[k];
+    if (static_cast<int>(c.credited.size()) >= clusters[k].count || found.count(apple)) continue;
+    found.insert(apple);
+    c.credited.push_back(apple);
+  }
+  s.found = static_cast<int>(found.size());
+  s.missed = s.visible - s.found;
+  std::set<int> voted;
+  for (const auto& [neg_votes, k, apple] : pairs) voted.insert(apple);
+  for (const int apple : visible)
+    if (!found.count(apple)) {
+      s.missed_ids.push_back(apple);
+      if (!voted.count(apple)) ++s.missed_without_points;
+    }
+  for (size_t k = 0; k < clusters.size(); ++k) {
+    ClusterTruth& c = s.clusters[k];
+    c.cluster = static_cast<int>(k);
+    c.votes = clusters[k].votes;
+    const int left = clusters[k].count - static_cast<int>(c.credited.size());
+    std::sort(c.credited.begin(), c.credited.end());
+    for (const auto& [apple, n] : clusters[k].votes)
+      if (n > c.top_votes) c.top_apple = apple, c.top_votes = n;
+    c.role = left <= 0 ? "found" : !c.credited.empty() ? "over_counted"
+                                 // Credited with nothing: on a visible apple (which another cluster holds) or not.
+                                 : c.top_apple >= 0 && visible.count(c.top_apple) ? "duplicate" : "not_visible";
+    if (left <= 0) continue;
+    (c.role == "over_counted" ? s.over_counted : c.role == "duplicate" ? s.duplicates : s.not_visible) += left;
+  }
+  return s;
+}
+
 SideTruthScore ScoreSideAgainstTruth(const std::vector<CameraView>& views, const std::vector<cv::Mat>& truth_masks,
                                      const std::set<int>& visible, const ClusterResult& result,
                                      const TruthScoreOptions& o) {
@@ -45,43 +91,23 @@ SideTruthScore ScoreSideAgainstTruth(const std::vector<CameraView>& views, const
     if (truth_masks[i].type() != CV_16UC1 || truth_masks[i].cols != views[i].width ||
         truth_masks[i].rows != views[i].height)
       Fail("truth mask of ", views[i].name, " must be 16-bit, one channel, ", views[i].width, "x", views[i].height);
-  SideTruthScore s;
-  s.visible = static_cast<int>(visible.size());
   std::vector<int> kept;
-  std::vector<std::map<int, int>> votes;  // per kept cluster: apple id -> votes
+  std::vector<ClusterVotes> votes;  // per kept cluster
   for (size_t c = 0; c < result.clusters.size(); ++c) {
     const FruitCluster& cluster = result.clusters[c];
     if (cluster.status != "kept") continue;
     kept.push_back(static_cast<int>(c));
-    s.count += cluster.count;
-    std::map<int, int>& v = votes.emplace_back();
+    ClusterVotes& v = votes.emplace_back();
+    v.count = cluster.count;
     for (int p : cluster.points)
       for (size_t f = 0; f < views.size(); ++f) {
         Eigen::Vector2d pixel;
         if (views[f].Depth(result.points[p].xyz) <= 0 || !views[f].Project(result.points[p].xyz, &pixel)) continue;
-        if (const int id = AppleAt(truth_masks[f], pixel, o.window_px); id >= 0) ++v[id];
+        if (const int id = AppleAt(truth_masks[f], pixel, o.window_px); id >= 0) ++v.votes[id];
       }
   }
-  // Pairs by votes, most first; ties by cluster then apple, so the result
-  // does not depend on the map's order.
-  std::vector<std::tuple<int, int, int>> pairs;  // (-votes, kept index, apple)
-  for (size_t k = 0; k < kept.size(); ++k)
-    for (const auto& [apple, n] : votes[k])
-      if (n >= o.min_votes && visible.count(apple)) pairs.emplace_back(-n, static_cast<int>(k), apple);
-  std::sort(pairs.begin(), pairs.end());
-  std::vector<int> credited(kept.size(), 0);
-  s.clusters.resize(kept.size());
-  std::set<int> found;
-  for (const auto& [neg_votes, k, apple] : pairs) {
-    if (credited[k] >= result.clusters[kept[k]].count || found.count(apple)) continue;
-    found.insert(apple);
-    ++credited[k];
-    s.clusters[k].credited.push_back(apple);
-  }
-  s.found = static_cast<int>(found.size());
-  s.missed = s.visible - s.found;
-  std::set<int> voted;
-  for (const auto& [neg_votes, k, apple] : pairs) voted.insert(apple);
+  SideTruthScore s = CreditApples(votes, visible, o.min_votes);
+  for (size_t k = 0; k < kept.size(); ++k) s.clusters[k].cluster = kept[k];
   std::map<int, int> views_seen;  // apple id -> views whose mask shows it
   for (const cv::Mat& mask : truth_masks) {
     std::set<int> here;
@@ -92,28 +118,12 @@ SideTruthScore ScoreSideAgainstTruth(const std::vector<CameraView>& views, const
     }
     for (const int apple : here) ++views_seen[apple];
   }
+  const std::set<int> missed(s.missed_ids.begin(), s.missed_ids.end());
   for (const int apple : visible) {
     const auto it = views_seen.find(apple);
     const int bin = std::min(it == views_seen.end() ? 0 : it->second, SideTruthScore::kViewsSeenBins - 1);
     ++s.visible_by_views_seen[bin];
-    if (!found.count(apple)) {
-      s.missed_ids.push_back(apple);
-      ++s.missed_by_views_seen[bin];
-      if (!voted.count(apple)) ++s.missed_without_points;
-    }
-  }
-  for (size_t k = 0; k < kept.size(); ++k) {
-    ClusterTruth& c = s.clusters[k];
-    c.cluster = kept[k];
-    std::sort(c.credited.begin(), c.credited.end());
-    for (const auto& [apple, n] : votes[k])
-      if (n > c.top_votes) c.top_apple = apple, c.top_votes = n;
-    const int left = result.clusters[kept[k]].count - credited[k];
-    c.role = left <= 0 ? "found" : credited[k] > 0 ? "over_counted"
-                                 // Credited with nothing: on a visible apple (which another cluster holds) or not.
-                                 : c.top_apple >= 0 && visible.count(c.top_apple) ? "duplicate" : "not_visible";
-    if (left <= 0) continue;
-    (c.role == "over_counted" ? s.over_counted : c.role == "duplicate" ? s.duplicates : s.not_visible) += left;
+    if (missed.count(apple)) ++s.missed_by_views_seen[bin];
   }
   return s;
 }

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <filesystem>
+#include <map>
 #include <set>
 #include <string>
 #include <vector>
@@ -37,6 +38,7 @@ struct ClusterTruth {
   std::vector<int> credited;     // 0-based ids of the visible apples it was credited with, ascending
   int top_apple = -1;            // the apple its points vote for most (-1: none)
   int top_votes = 0;
+  std::map<int, int> votes;      // apple id -> votes of its points (ClusterVotes)
   // "found" (credited with its count), "over_counted" (with some, counted
   // higher), "duplicate" (with none, on a visible apple another cluster
   // holds) or "not_visible".
@@ -67,6 +69,22 @@ struct SideTruthScore {
   std::vector<int> missed_by_views_seen = std::vector<int>(kViewsSeenBins, 0);
   std::vector<ClusterTruth> clusters;  // the kept clusters, in order
 };
+
+// One cluster's fruit points against the truth: how often they land on each
+// apple (0-based id -> points-in-views), and the count it is credited up to.
+struct ClusterVotes {
+  int count = 0;
+  std::map<int, int> votes;
+};
+
+// The crediting ScoreSideAgainstTruth does, from the votes: (cluster, apple)
+// pairs with at least `min_votes` on a visible apple, most votes first (ties:
+// the earlier cluster, then the lower id), each apple once, each cluster up
+// to its count. Fills count, visible, found, missed, missed_ids,
+// missed_without_points, duplicates, over_counted, not_visible and clusters
+// (ClusterTruth::cluster: the index into `clusters`); not the views bins.
+// The merge credits its clusters again with the counts it gave them.
+SideTruthScore CreditApples(const std::vector<ClusterVotes>& clusters, const std::set<int>& visible, int min_votes);
 
 // Credits each kept cluster of `result` with up to its count of visible
 // apples: every fruit point of the cluster is projected into every view and

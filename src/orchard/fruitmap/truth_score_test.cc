@@ -131,6 +131,38 @@ TEST(ScoreSideAgainstTruth, SplitsTheCountIntoFoundMissedDuplicatedAndNotVisible
   EXPECT_EQ(u.missed_without_points, 0);
 }
 
+TEST(CreditApples, MostVotesFirstEachAppleOnceEachClusterUpToItsCount) {
+  // Visible 0-3. Cluster 0 (count 2) votes 0: 9, 1: 5, 2: 1 (below min
+  // votes); cluster 1 (count 1) votes 1: 7 and takes it before cluster 0;
+  // cluster 2 (count 1) votes 0 only, which cluster 0 holds: a duplicate;
+  // cluster 3 (count 2) votes 9, not visible.
+  std::vector<ClusterVotes> clusters = {
+      {2, {{0, 9}, {1, 5}, {2, 1}}}, {1, {{1, 7}}}, {1, {{0, 4}}}, {2, {{9, 30}}}};
+  const SideTruthScore s = CreditApples(clusters, {0, 1, 2, 3}, 2);
+  ASSERT_EQ(s.clusters.size(), 4u);
+  EXPECT_EQ(s.clusters[0].credited, std::vector<int>{0});
+  EXPECT_EQ(s.clusters[0].role, "over_counted");
+  EXPECT_EQ(s.clusters[1].credited, std::vector<int>{1});
+  EXPECT_EQ(s.clusters[1].role, "found");
+  EXPECT_EQ(s.clusters[2].role, "duplicate");
+  EXPECT_EQ(s.clusters[3].role, "not_visible");
+  EXPECT_EQ(s.clusters[3].top_apple, 9);
+  EXPECT_EQ(s.count, 6);
+  EXPECT_EQ(s.found, 2);
+  EXPECT_EQ(s.missed_ids, (std::vector<int>{2, 3}));
+  EXPECT_EQ(s.missed_without_points, 2);  // 2's one vote is below min votes
+  EXPECT_EQ(s.over_counted, 1);
+  EXPECT_EQ(s.duplicates, 1);
+  EXPECT_EQ(s.not_visible, 2);
+  EXPECT_EQ(s.count - s.visible, s.duplicates + s.over_counted + s.not_visible - s.missed);
+  // Counted higher, as the merge may count a cluster, it holds more.
+  clusters[2].count = 2;
+  clusters[2].votes[3] = 2;
+  const SideTruthScore higher = CreditApples(clusters, {0, 1, 2, 3}, 2);
+  EXPECT_EQ(higher.clusters[2].credited, std::vector<int>{3});
+  EXPECT_EQ(higher.clusters[2].role, "over_counted");
+}
+
 TEST(ScoreSideAgainstTruth, MasksThatDoNotMatchTheViewsFail) {
   const std::vector<CameraView> views = Views(2);
   ClusterResult r;

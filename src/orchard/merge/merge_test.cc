@@ -527,6 +527,26 @@ TEST(SharedCountTest, LinkedClustersShareTheSmallerSidesApples) {
   EXPECT_THROW(CountSharedApples(front, back, SharedCountOptions{-1}), Error);
 }
 
+TEST(SharedCountTest, ClustersLinkedToNothingCountTheirUnlinkedCount) {
+  // Front 1 and back 1 hold one apple seen from both sides; front 2 is seen
+  // from the front only and counts 3 by its side's own rule, 2 in its
+  // largest views. The linked clusters keep their count whatever theirs.
+  const Eigen::Vector3d a(0, 2.5, 1.5), far(1, 2.5, 1.5), e(0.01, 0, 0);
+  std::vector<SideCluster> front = {Cluster(1, 1, {a}), Cluster(2, 2, {far})};
+  const std::vector<SideCluster> back = {Cluster(1, 1, {a + e})};
+  front[0].count_unlinked = 4;
+  front[1].count_unlinked = 3;
+  const SharedCount s = CountSharedApples(front, back, SharedCountOptions());
+  EXPECT_EQ(s.front_counts, (std::vector<int>{1, 3}));
+  EXPECT_EQ(s.back_counts, (std::vector<int>{1}));
+  EXPECT_EQ(s.front, 4);
+  EXPECT_DOUBLE_EQ(s.shared, 1.0);
+  EXPECT_EQ(s.total, 4);  // 4 + 1 - 1
+  // Unset (-1), the count stands.
+  front[1].count_unlinked = -1;
+  EXPECT_EQ(CountSharedApples(front, back, SharedCountOptions()).total, 3);
+}
+
 TEST(MergeTruthTest, TakesTheMergedCountApart) {
   // Visible: front 0-5, back 3-8 (3, 4, 5 from both sides), 9 apples in all.
   const Eigen::Vector3d a(0, 2.5, 1.5), dx(0.5, 0, 0), e(0.02, 0, 0);
@@ -615,6 +635,18 @@ TEST(SideCloudTest, LoadsKeptAndFallenClusters) {
   EXPECT_TRUE(cloud.fallen[0].centre.isApprox(Eigen::Vector3d(1, 2, 0.04)));
   ScaleSideCloud(&cloud, 2);
   EXPECT_TRUE(cloud.fallen[0].centre.isApprox(Eigen::Vector3d(2, 4, 0.08)));
+  // The unlinked count from a named column; a side without it is an error.
+  EXPECT_EQ(cloud.clusters[0].count_unlinked, 3);
+  WriteTextFileAtomic(dir / "clusters.csv",
+                      "id,x,y,z,extent_x,extent_y,extent_z,points,count,status,count_by_pixels,count_by_count\n"
+                      "1,0,2,1,0,0,0,2,3,kept,3,4\n");
+  EXPECT_EQ(LoadSideCloud(dir, "front", "count_by_count").clusters[0].count_unlinked, 4);
+  try {
+    LoadSideCloud(dir, "front", "count_by_views");
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("has no column count_by_views"), std::string::npos) << e.what();
+  }
 }
 
 TEST(SideCloudTest, RowFrameTransformMapsTheAxes) {

@@ -44,8 +44,6 @@ SharedCount CountSharedApples(const std::vector<SideCluster>& front, const std::
                               const SharedCountOptions& o) {
   o.Check();
   SharedCount r;
-  for (const auto& c : front) r.front += c.count;
-  for (const auto& c : back) r.back += c.count;
   const int nf = static_cast<int>(front.size()), nb = static_cast<int>(back.size());
   const double d = o.intersection_distance;
   std::vector<int> parent(nf + nb);
@@ -68,8 +66,16 @@ SharedCount CountSharedApples(const std::vector<SideCluster>& front, const std::
   }
   r.front_shared.assign(nf, 0);
   r.back_shared.assign(nb, 0);
+  for (const auto& c : front) r.front_counts.push_back(c.count);
+  for (const auto& c : back) r.back_counts.push_back(c.count);
   for (auto& [root, g] : groups) {
-    if (g.front.empty() || g.back.empty()) continue;
+    if (g.front.empty() || g.back.empty()) {
+      for (int f : g.front)
+        if (front[f].count_unlinked >= 0) r.front_counts[f] = front[f].count_unlinked;
+      for (int b : g.back)
+        if (back[b].count_unlinked >= 0) r.back_counts[b] = back[b].count_unlinked;
+      continue;
+    }
     g.shared = std::min(g.front_count, g.back_count);
     r.shared += g.shared;
     for (int f : g.front)
@@ -78,6 +84,8 @@ SharedCount CountSharedApples(const std::vector<SideCluster>& front, const std::
       if (g.back_count > 0) r.back_shared[b] = g.shared * static_cast<double>(back[b].count) / g.back_count;
     r.groups.push_back(g);
   }
+  for (int c : r.front_counts) r.front += c;
+  for (int c : r.back_counts) r.back += c;
   r.total = r.front + r.back - static_cast<int>(r.shared);
   return r;
 }

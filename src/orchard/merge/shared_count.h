@@ -5,6 +5,8 @@
 // |F u B| = |F| + |B| - |F n B| apples, with |F n B| = min(|F|, |B|): the
 // side that sees fewer of the group's apples sees a subset of what the other
 // side sees. total = sum of all counts - sum of the groups' intersections.
+// A cluster linked to nothing on the other side counts its count_unlinked
+// (where set: its side's own best-views rule, see YieldOptions).
 #pragma once
 
 #include <vector>
@@ -37,7 +39,7 @@ struct SharedGroup {
 };
 
 struct SharedCount {
-  int front = 0, back = 0;  // each side's sum of counts
+  int front = 0, back = 0;  // each side's sum of counts (front_counts, back_counts)
   double shared = 0;        // apples seen from both sides
   int total = 0;            // front + back - shared
   std::vector<SharedLink> links;
@@ -45,6 +47,8 @@ struct SharedCount {
   // Per cluster: its part of its group's shared apples (the smaller side's
   // clusters share all their apples, the larger side's in proportion).
   std::vector<double> front_shared, back_shared;
+  // Per cluster: the count used (count, or count_unlinked when in no group).
+  std::vector<int> front_counts, back_counts;
 };
 
 // Both cluster lists in one frame.

@@ -61,7 +61,7 @@ Eigen::Vector3d Vec3(const nlohmann::json& j) {
 
 }  // namespace
 
-SideCloud LoadSideCloud(const fs::path& dir, const std::string& name) {
+SideCloud LoadSideCloud(const fs::path& dir, const std::string& name, const std::string& unlinked_count_column) {
   SideCloud cloud;
   cloud.name = name;
   double scale = 1;  // COLMAP's model -> metres (the poses were scaled by it before the row frame was made)
@@ -84,21 +84,33 @@ SideCloud LoadSideCloud(const fs::path& dir, const std::string& name) {
   {
     std::istringstream csv(ReadTextFile(csv_path));
     std::string line;
+    const auto split = [](const std::string& text) {
+      std::vector<std::string> f;
+      std::stringstream ls(text);
+      std::string item;
+      while (std::getline(ls, item, ',')) f.push_back(item);
+      return f;
+    };
     std::getline(csv, line);
     if (line.rfind("id,x,y,z,", 0) != 0) Fail(name, " side: ", csv_path.string(), " is not a side clusters.csv");
+    const std::vector<std::string> header = split(line);
+    const auto unlinked_it = std::find(header.begin(), header.end(), unlinked_count_column);
+    if (unlinked_it == header.end())
+      Fail(name, " side: ", csv_path.string(), " has no column ", unlinked_count_column,
+           " (made by an older version? run the side again)");
+    const size_t unlinked_col = static_cast<size_t>(unlinked_it - header.begin());
     int row = 1;
     while (std::getline(csv, line)) {
       ++row;
-      std::vector<std::string> f;
-      std::stringstream ls(line);
-      std::string item;
-      while (std::getline(ls, item, ',')) f.push_back(item);
-      if (f.size() < 10) Fail(name, " side: ", csv_path.string(), " line ", row, " has ", f.size(), " fields");
+      const std::vector<std::string> f = split(line);
+      if (f.size() < std::max<size_t>(10, unlinked_col + 1))
+        Fail(name, " side: ", csv_path.string(), " line ", row, " has ", f.size(), " fields");
       if (f[9] != "kept" && f[9] != "fallen") continue;
       SideCluster c;
       try {
         c.id = std::stoi(f[0]);
         c.count = std::stoi(f[8]);
+        c.count_unlinked = std::stoi(f[unlinked_col]);
       } catch (const std::exception&) {
         Fail(name, " side: ", csv_path.string(), " line ", row, ": bad id or count");
       }

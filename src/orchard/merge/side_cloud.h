@@ -18,6 +18,9 @@ namespace fs = std::filesystem;
 struct SideCluster {
   int id = 0;      // the id in the side's clusters.csv
   int count = 0;   // apples (median of the best views)
+  // Its count when no cluster of the other side links to it (-1: count);
+  // LoadSideCloud's unlinked_count_column.
+  int count_unlinked = -1;
   std::vector<Eigen::Vector3d> points;  // fruit points, row frame
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
   Eigen::Vector3d min = Eigen::Vector3d::Zero(), max = Eigen::Vector3d::Zero();
@@ -58,9 +61,11 @@ Eigen::Isometry3d RowFrameTransform(const Eigen::Vector3d& origin, const Eigen::
                                     const Eigen::Vector3d& across, const Eigen::Vector3d& up);
 
 // Reads side.json (row_frame, count), clusters.csv (kept and fallen clusters,
-// their counts), fruit.ply (points with cluster ids) and, when present,
+// their counts; count_unlinked from the column `unlinked_count_column`, e.g.
+// "count_by_count"), fruit.ply (points with cluster ids) and, when present,
 // sparse/points3D.txt and images.txt of `side_dir`. Throws orchard::Error naming the file
 // when one is missing or malformed.
-SideCloud LoadSideCloud(const fs::path& side_dir, const std::string& name);
+SideCloud LoadSideCloud(const fs::path& side_dir, const std::string& name,
+                        const std::string& unlinked_count_column = "count");
 
 }  // namespace orchard

@@ -60,34 +60,43 @@ Json SideJson(const SideSummary& s, const SideCloud& cloud, const SideInputs& in
   return j;
 }
 
-// A side's merge clusters scored against the truth (side output
-// truth_merge_clusters.json): the apples each holds, by cluster id.
-Json ReadMergeClustersTruth(const SideInputs& side) {
+// A side's merge clusters credited again (CreditApples) from their points'
+// votes in the side's truth file (side output truth_merge_clusters.json),
+// with the counts the merge gave them.
+SideTruthScore CreditMergeClusters(const SideInputs& side, const std::vector<SideCluster>& clusters,
+                                   const std::set<int>& visible) {
   const fs::path path = side.out / "truth_merge_clusters.json";
-  const Json j = Json::parse(ReadTextFile(path), nullptr, false);
-  if (j.is_discarded() || !j.contains("credited")) Fail("truth: ", path.string(), " is not a merge clusters' truth file");
-  return j;
+  const Json truth = Json::parse(ReadTextFile(path), nullptr, false);
+  if (truth.is_discarded() || !truth.contains("votes"))
+    Fail("truth: ", path.string(), " is not a merge clusters' truth file with votes (made by an older version?)");
+  std::vector<ClusterVotes> votes;
+  for (const SideCluster& c : clusters) {
+    ClusterVotes& v = votes.emplace_back();
+    v.count = c.count;
+    const std::string id = std::to_string(c.id);
+    if (truth.at("votes").contains(id))
+      for (const auto& [apple, n] : truth.at("votes").at(id).items()) v.votes[std::stoi(apple)] = n.get<int>();
+  }
+  return CreditApples(votes, visible, truth.value("min_votes", TruthScoreOptions().min_votes));
 }
 
-std::map<int, std::vector<int>> Credited(const Json& merge_clusters_truth) {
+std::map<int, std::vector<int>> Credited(const std::vector<SideCluster>& clusters, const SideTruthScore& score) {
   std::map<int, std::vector<int>> credited;
-  for (const auto& [id, apples] : merge_clusters_truth.at("credited").items())
-    credited[std::stoi(id)] = apples.get<std::vector<int>>();
+  for (const ClusterTruth& c : score.clusters) credited[clusters[c.cluster].id] = c.credited;
   return credited;
 }
 
 // The merged count taken apart against the truth (merge_truth.h), logged in one line.
 Json MergeTruthJson(const SideInputs& front, const SideInputs& back, const std::vector<SideCluster>& front_clusters,
                     const std::vector<SideCluster>& back_clusters, const SharedCount& shared) {
-  const Json front_truth = ReadMergeClustersTruth(front), back_truth = ReadMergeClustersTruth(back);
-  const MergeTruth t = ScoreMergeAgainstTruth(front_clusters, back_clusters, shared, Credited(front_truth),
-                                              Credited(back_truth), ReadSideVisibleApples(front.truth),
-                                              ReadSideVisibleApples(back.truth));
+  const std::set<int> visible_front = ReadSideVisibleApples(front.truth), visible_back = ReadSideVisibleApples(back.truth);
+  const SideTruthScore front_score = CreditMergeClusters(front, front_clusters, visible_front),
+                       back_score = CreditMergeClusters(back, back_clusters, visible_back);
+  const MergeTruth t = ScoreMergeAgainstTruth(front_clusters, back_clusters, shared, Credited(front_clusters, front_score),
+                                              Credited(back_clusters, back_score), visible_front, visible_back);
   // What each side's extra is made of, in the side's own terms (truth_score.h).
-  const auto extra_parts = [](const Json& side) {
-    Json parts = Json::object();
-    for (const char* k : {"duplicates", "over_counted", "not_visible"}) parts[k] = side.value(k, 0);
-    return parts;
+  const auto extra_parts = [](const SideTruthScore& side) {
+    return Json{{"duplicates", side.duplicates}, {"over_counted", side.over_counted}, {"not_visible", side.not_visible}};
   };
   spdlog::info("truth: merged {} for {} visible: clusters above their apples +{} front, +{} back; held by neither -{}; "
                "held by both sides {} ({} linked, {} not: counted twice), counted once {:.0f}",
@@ -103,8 +112,8 @@ Json MergeTruthJson(const SideInputs& front, const SideInputs& back, const std::
           {"unlinked", t.unlinked},
           {"extra_front", t.extra_front},
           {"extra_back", t.extra_back},
-          {"extra_front_parts", extra_parts(front_truth)},
-          {"extra_back_parts", extra_parts(back_truth)},
+          {"extra_front_parts", extra_parts(front_score)},
+          {"extra_back_parts", extra_parts(back_score)},
           {"shared", t.shared},
           {"note", "total - visible_any = extra_front + extra_back - held_by_neither + unlinked + (linked - shared): "
                    "the sides' merge clusters scored against the generator's masks"}};
@@ -217,8 +226,12 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
                   "): it is likely broken";
     Fail(e.what(), broken);
   };
-  SideCloud front_cloud = LoadSideCloud(front.out, "front");
-  SideCloud back_cloud = LoadSideCloud(back.out, "back");
+  // The column of the sides' clusters.csv that counts a cluster the other side does not link.
+  const std::string unlinked_column =
+      o.unlinked_by_sides_rule ? std::string("count_by_") + BestViewsName(ResolvedBestViews(one_side, in.front))
+                               : std::string("count");
+  SideCloud front_cloud = LoadSideCloud(front.out, "front", unlinked_column);
+  SideCloud back_cloud = LoadSideCloud(back.out, "back", unlinked_column);
   RowRegistrationOptions row_options = o.row;
   row_options.camera_height = o.side.camera_height;
   Json levelling = Json::object(), merge_warnings = Json::array();
@@ -352,7 +365,16 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
   SharedCountOptions shared_options = o.shared;
   shared_options.intersection_distance = IntersectionDistance(o, y.registration);
   const SharedCount shared = CountSharedApples(front_cloud.clusters, back_in_front, shared_options);
+  // From here on each cluster's count is the one the merge used.
+  for (auto [clusters, counts] : {std::pair{&front_cloud.clusters, &shared.front_counts}, {&back_in_front, &shared.back_counts}})
+    for (size_t i = 0; i < clusters->size(); ++i) {
+      y.unlinked_added += (*counts)[i] - (*clusters)[i].count;
+      (*clusters)[i].count = (*counts)[i];
+    }
   y.merge_front = shared.front, y.merge_back = shared.back, y.merge_shared = shared.shared, y.total = shared.total;
+  if (y.unlinked_added != 0)
+    spdlog::info("merge clusters linked to nothing on the other side, counted by their side's rule ({}): {:+d} apples",
+                 unlinked_column, y.unlinked_added);
   y.front = y.front_side.one_side_count, y.back = y.back_side.one_side_count;
   y.sum_of_sides = y.front + y.back;
   y.shared = y.sum_of_sides - y.total;
@@ -408,9 +430,12 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
       {"merge", {{"front_clusters", y.merge_front},
                  {"back_clusters", y.merge_back},
                  {"shared", std::round(y.merge_shared * 10) / 10},
+                 {"unlinked_added", y.unlinked_added},
                  {"note", "total = front_clusters + back_clusters - shared: the sides' clusters kept for the merge "
                           "(" + std::to_string(o.side.clusters.min_points) +
                               " fruit points, ghosts removed) and the apples the inclusion-exclusion counted once; "
+                              "unlinked_added: what the clusters linked to nothing on the other side added, counted "
+                              "by their side's rule (" + unlinked_column + ") rather than in their largest views; "
                               "front and back above are each side's own count (orchard side's rules)"}}},
       {"per_metre", per_metre},
       {"bin_length_m", o.bin_length},
@@ -438,6 +463,7 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
       {"duplicate_shared_fraction", o.side.clusters.duplicate_shared_fraction},
       {"best_views_by", BestViewsName(ResolvedBestViews(o.side.clusters, in.front))},
       {"sides_best_views_by", BestViewsName(ResolvedBestViews(one_side, in.front))},
+      {"unlinked_count", unlinked_column},
       {"match_distance_m", o.registration.match_distance},
       {"max_scale_change", o.registration.max_scale_change},
       {"row_registration", o.row_registration},

@@ -2,6 +2,10 @@
 // (true poses, the generator's masks): the merged count against the truth,
 // the registration against the true alignment, resuming an interrupted run,
 // and the failure on the sides of two different rows.
+#include <sstream>
+#include <string>
+#include <vector>
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -130,6 +134,25 @@ TEST_F(YieldTest, MergesBothSidesAndResumes) {
   EXPECT_EQ(again.back, y.back);
   EXPECT_EQ(fs::last_write_time(front_cache), front_time);  // not redone
   EXPECT_TRUE(fs::exists(*dir_ / "out/yield.json"));
+  // Instance masks: the clusters linked to nothing on the other side are
+  // counted in their highest-count views (which can only add), and
+  // clusters.csv holds the counts the merge used.
+  EXPECT_GE(y.unlinked_added, 0);
+  EXPECT_EQ(nlohmann::json::parse(ReadTextFile(*dir_ / "out/yield.json")).at("settings").at("unlinked_count"),
+            "count_by_count");
+  {
+    std::istringstream csv(ReadTextFile(*dir_ / "out/clusters.csv"));
+    std::string line;
+    std::getline(csv, line);  // side,id,x,y,z,count,...
+    int sum = 0;
+    while (std::getline(csv, line)) {
+      std::vector<std::string> f;
+      std::stringstream ls(line);
+      for (std::string item; std::getline(ls, item, ',');) f.push_back(item);
+      sum += std::stoi(f.at(5));
+    }
+    EXPECT_EQ(sum, again.merge_front + again.merge_back);
+  }
   // ... and yield.json and the report say where each side's count comes from.
   const auto js = nlohmann::json::parse(ReadTextFile(*dir_ / "out/yield.json"));
   EXPECT_EQ(js.at("sides").at("front").at("truth").at("visible").get<int>(), visible_front);
@@ -141,6 +164,13 @@ TEST_F(YieldTest, MergesBothSidesAndResumes) {
                                        m.at("held_by_neither").get<int>() + m.at("unlinked").get<int>() +
                                        m.at("linked").get<int>() - static_cast<int>(m.at("shared").get<double>()));
   EXPECT_GT(m.at("linked").get<int>(), 0);
+  // The merge credited its clusters with the counts it used: each side's
+  // extra is the sum of its parts.
+  for (const char* side : {"front", "back"}) {
+    int parts = 0;
+    for (const auto& [k, v] : m.at(std::string("extra_") + side + "_parts").items()) parts += v.get<int>();
+    EXPECT_EQ(parts, m.at(std::string("extra_") + side).get<int>()) << side;
+  }
   const std::string report = ReadTextFile(*dir_ / "out/report.html");
   EXPECT_NE(report.find("Where each side's count comes from"), std::string::npos);
   EXPECT_NE(report.find("Where the merged count comes from"), std::string::npos);
