@@ -57,4 +57,8 @@ std::string PadDigitRuns(const std::string& name, int width = 6);
 // True when the extension is one of the image extensions above.
 bool IsImageFile(const fs::path& path);
 
+// The comma-separated fields of one line of the project's CSV files (no
+// quoting: none of its fields holds a comma); a trailing empty field is dropped.
+std::vector<std::string> SplitCsvLine(const std::string& line);
+
 }  // namespace orchard

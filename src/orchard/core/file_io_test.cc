@@ -80,6 +80,13 @@ TEST(FileIo, NaturalOrderOfFrameNames) {
   fs::remove_all(dir);
 }
 
+TEST(FileIo, SplitCsvLine) {
+  EXPECT_EQ(SplitCsvLine("id,x,,count"), (std::vector<std::string>{"id", "x", "", "count"}));
+  EXPECT_EQ(SplitCsvLine("a,b,"), (std::vector<std::string>{"a", "b"}));
+  EXPECT_EQ(SplitCsvLine(",a"), (std::vector<std::string>{"", "a"}));
+  EXPECT_TRUE(SplitCsvLine("").empty());
+}
+
 TEST(Box, IoUKnownValues) {
   Box a{0, 0, 10, 10}, b{5, 0, 15, 10};
   EXPECT_DOUBLE_EQ(IoU(a, b), 50.0 / 150.0);

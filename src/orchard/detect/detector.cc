@@ -96,10 +96,7 @@ std::vector<BlobRecord> ReadBlobsCsv(const fs::path& path) {
     ++line_no;
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line.empty() || (line_no == 1 && line.rfind("name,", 0) == 0)) continue;
-    std::vector<std::string> f;
-    std::stringstream ls(line);
-    std::string field;
-    while (std::getline(ls, field, ',')) f.push_back(field);
+    const std::vector<std::string> f = SplitCsvLine(line);
     if (f.size() != 10) Fail(path.string(), ":", line_no, ": expected 10 fields (name,blob_id,x1,y1,x2,y2,pixels,cx,cy,score), got ", f.size());
     BlobRecord r;
     r.name = f[0];

@@ -133,14 +133,7 @@ std::set<int> ReadVisibleApples(const fs::path& apples_csv, const std::string& s
   std::istringstream in(ReadTextFile(apples_csv));
   std::string line;
   std::getline(in, line);
-  const auto split = [](const std::string& text) {
-    std::vector<std::string> fields;
-    std::stringstream ls(text);
-    std::string item;
-    while (std::getline(ls, item, ',')) fields.push_back(item);
-    return fields;
-  };
-  const std::vector<std::string> header = split(line);
+  const std::vector<std::string> header = SplitCsvLine(line);
   const auto column = [&](const std::string& name) {
     const auto it = std::find(header.begin(), header.end(), name);
     if (it == header.end()) Fail(apples_csv.string(), " has no column '", name, "' (not the generator's apples.csv?)");
@@ -153,7 +146,7 @@ std::set<int> ReadVisibleApples(const fs::path& apples_csv, const std::string& s
   while (std::getline(in, line)) {
     ++line_no;
     if (line.empty()) continue;
-    const std::vector<std::string> f = split(line);
+    const std::vector<std::string> f = SplitCsvLine(line);
     if (f.size() != header.size()) Fail(apples_csv.string(), " line ", line_no, ": ", f.size(), " fields, header has ", header.size());
     if (f[row_col] == "0" && f[ground_col] == "0" && f[visible_col] == "1") {
       try {

@@ -84,16 +84,9 @@ SideCloud LoadSideCloud(const fs::path& dir, const std::string& name, const std:
   {
     std::istringstream csv(ReadTextFile(csv_path));
     std::string line;
-    const auto split = [](const std::string& text) {
-      std::vector<std::string> f;
-      std::stringstream ls(text);
-      std::string item;
-      while (std::getline(ls, item, ',')) f.push_back(item);
-      return f;
-    };
     std::getline(csv, line);
     if (line.rfind("id,x,y,z,", 0) != 0) Fail(name, " side: ", csv_path.string(), " is not a side clusters.csv");
-    const std::vector<std::string> header = split(line);
+    const std::vector<std::string> header = SplitCsvLine(line);
     const auto unlinked_it = std::find(header.begin(), header.end(), unlinked_count_column);
     if (unlinked_it == header.end())
       Fail(name, " side: ", csv_path.string(), " has no column ", unlinked_count_column,
@@ -102,7 +95,7 @@ SideCloud LoadSideCloud(const fs::path& dir, const std::string& name, const std:
     int row = 1;
     while (std::getline(csv, line)) {
       ++row;
-      const std::vector<std::string> f = split(line);
+      const std::vector<std::string> f = SplitCsvLine(line);
       if (f.size() < std::max<size_t>(10, unlinked_col + 1))
         Fail(name, " side: ", csv_path.string(), " line ", row, " has ", f.size(), " fields");
       if (f[9] != "kept" && f[9] != "fallen") continue;

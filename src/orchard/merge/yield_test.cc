@@ -146,10 +146,7 @@ TEST_F(YieldTest, MergesBothSidesAndResumes) {
     std::getline(csv, line);  // side,id,x,y,z,count,...
     int sum = 0;
     while (std::getline(csv, line)) {
-      std::vector<std::string> f;
-      std::stringstream ls(line);
-      for (std::string item; std::getline(ls, item, ',');) f.push_back(item);
-      sum += std::stoi(f.at(5));
+      sum += std::stoi(SplitCsvLine(line).at(5));
     }
     EXPECT_EQ(sum, again.merge_front + again.merge_back);
   }
