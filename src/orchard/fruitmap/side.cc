@@ -358,12 +358,11 @@ ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std
   r.row_origin = mean - ground.normal * ground.SignedDistance(mean);
   std::vector<std::pair<double, double>> tree_distances;  // distance, pixels
   for (auto& c : r.clusters) {
-    std::vector<int> by_pixels_frames, by_count_frames;
-    c.count_by_pixels = MedianOfBestViews(c.views, o.best_views, &by_pixels_frames, false);
-    c.count_by_count = MedianOfBestViews(c.views, o.best_views, &by_count_frames, true);
+    // Both rules' counts; the frames of the one the options chose.
     const bool by_count = o.best_views_by == ClusterOptions::BestViews::kCount;
+    c.count_by_pixels = MedianOfBestViews(c.views, o.best_views, by_count ? nullptr : &c.count_frames, false);
+    c.count_by_count = MedianOfBestViews(c.views, o.best_views, by_count ? &c.count_frames : nullptr, true);
     c.count = by_count ? c.count_by_count : c.count_by_pixels;
-    c.count_frames = by_count ? by_count_frames : by_pixels_frames;
     c.height = ground.SignedDistance(c.centre);
     c.distance = across.dot(c.centre - mean);
     c.status = EvidenceStatus(c, o);
