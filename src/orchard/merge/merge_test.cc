@@ -244,6 +244,10 @@ struct RowScene {
   double seen_front_lo = -2, seen_front_hi = 5.75, seen_back_lo = -2, seen_back_hi = 5.75;
   int shared = 0;
   unsigned seed = 1;
+  // Trunks 4.5 cm in radius at `trees`, under the canopy (points on the
+  // face each side sees, 0.12-0.5 m up); grass over the whole stretch at
+  // trunk height; a clod (a low lump) at x = 1.8 m.
+  bool trunks = false, grass = false, clod = false;
 };
 
 void RowSides(const RowScene& scene, const Eigen::Isometry3d& back_to_front, SideCloud* front, SideCloud* back) {
@@ -262,7 +266,18 @@ void RowSides(const RowScene& scene, const Eigen::Isometry3d& back_to_front, Sid
         const Eigen::Vector3d p(t - 0.5 + u(rng), f ? 1.9 + 0.6 * u(rng) : 3.1 - 0.6 * u(rng), 0.6 + 2.4 * u(rng));
         if (seen(p.x(), f)) add(p);
       }
+    std::normal_distribution<double> noise(0, 0.015);
+    if (scene.trunks)
+      for (double t : scene.trees)
+        for (int i = 0; i < 25; ++i) {
+          const Eigen::Vector3d p(t + noise(rng), (f ? 2.5 - 0.045 : 2.5 + 0.045) + noise(rng), 0.12 + 0.38 * u(rng));
+          if (seen(p.x(), f)) add(p);
+        }
     const double lo = f ? scene.seen_front_lo : scene.seen_back_lo, hi = f ? scene.seen_front_hi : scene.seen_back_hi;
+    if (scene.grass)
+      for (int i = 0; i < 200; ++i) add(Eigen::Vector3d(lo + (hi - lo) * u(rng), 1.9 + 1.2 * u(rng), 0.12 + 0.2 * u(rng)));
+    if (scene.clod && seen(1.8, f))
+      for (int i = 0; i < 30; ++i) add(Eigen::Vector3d(1.8 + noise(rng), 2.3 + noise(rng), 0.12 + 0.04 * u(rng)));
     // The cameras film 2 m either side of where they pass, 1.5 m high.
     for (double x = lo + 2; x <= hi - 2 + 1e-9; x += 0.125) {
       const Eigen::Vector3d c(x, f ? 0 : 5, 1.5);
@@ -306,7 +321,7 @@ TEST(RowRegistrationTest, RecoversKnownTransformsWithoutSharedFruit) {
     EXPECT_NEAR(r.along, along, 0.05);
     // Assumed: each side's leaves reach the centre plane; the 95% quantile
     // of a 0.6 m band falls 3 cm short of it on each side.
-    EXPECT_TRUE(r.across_assumed);
+    EXPECT_EQ(r.across_from, Registration::Across::kAssumed);
     EXPECT_NEAR(r.across, across - 0.06, 0.03);
     EXPECT_GT(r.correlation, 0.9);
     EXPECT_GT(r.overlap, 3.5);  // the camera paths: 0..3.75 m
@@ -335,6 +350,76 @@ TEST(RowRegistrationTest, RecoversKnownTransformsWithoutSharedFruit) {
   EXPECT_NEAR(r.across, 5.0 - 0.06, 0.06);
 }
 
+TEST(RowRegistrationTest, FindsTrunksUnderTheCanopy) {
+  RowScene scene;
+  scene.trunks = scene.grass = scene.clod = true;
+  SideCloud front, back;
+  const double across = 5.2;
+  RowSides(scene, BackToFrontTransform(0, 0.3, across), &front, &back);
+  const RowRegistrationOptions o;
+  for (const SideCloud* side : {&front, &back}) {
+    const std::vector<Trunk> trunks = FindTrunks(*side, o);
+    ASSERT_EQ(trunks.size(), 4u) << side->name;  // not the clod, not the grass
+    for (size_t i = 0; i < trunks.size(); ++i) {
+      // The back's trunks, brought into the front frame.
+      const Eigen::Vector3d at =
+          side == &front ? Eigen::Vector3d(trunks[i].along, trunks[i].across, 0)
+                         : Eigen::Vector3d(BackToFrontTransform(0, 0.3, across) *
+                                           Eigen::Vector3d(trunks[i].along, trunks[i].across, 0));
+      const size_t tree = side == &front ? i : trunks.size() - 1 - i;  // the back runs the other way
+      EXPECT_NEAR(at.x(), scene.trees[tree], 0.02) << side->name << " trunk " << i;
+      EXPECT_NEAR(at.y(), side == &front ? 2.455 : 2.545, 0.02) << side->name << " trunk " << i;
+      EXPECT_GE(trunks[i].points, 20);
+    }
+  }
+  // Grass and a clod alone are no trunks.
+  scene.trunks = false;
+  SideCloud bare_front, bare_back;
+  RowSides(scene, BackToFrontTransform(0, 0.3, across), &bare_front, &bare_back);
+  EXPECT_TRUE(FindTrunks(bare_front, o).empty());
+  EXPECT_TRUE(FindTrunks(bare_back, o).empty());
+  // Given poses: no sparse points, no trunks.
+  bare_front.sparse.clear();
+  EXPECT_TRUE(FindTrunks(bare_front, o).empty());
+  EXPECT_TRUE(std::isnan(AcrossFromTrunks(bare_front, back, o).across));
+}
+
+TEST(RowRegistrationTest, TakesTheAcrossDistanceFromTrunks) {
+  // No shared fruit: the trunks measure the distance across where the
+  // centre-plane assumption would guess it; still only on the user's word.
+  RowScene scene;
+  scene.trunks = scene.grass = true;
+  RowRegistrationOptions same_row;
+  same_row.assume_same_row = true;
+  for (const auto& [along, across] : {std::pair{0.0, 5.0}, {0.4, 5.6}, {-0.8, 4.7}}) {
+    SideCloud front, back;
+    RowSides(scene, BackToFrontTransform(0, along, across), &front, &back);
+    try {
+      RegisterSidesOnRow(front, back, RowRegistrationOptions());
+      FAIL() << "registered on the canopy and trunks without --same-row";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("--same-row to register the sides on the canopy and the trunks"),
+                std::string::npos)
+          << e.what();
+    }
+    const Registration r = RegisterSidesOnRow(front, back, same_row);
+    EXPECT_EQ(r.across_from, Registration::Across::kTrunks);
+    EXPECT_EQ(r.trunks_front, 4);
+    EXPECT_EQ(r.trunks_back, 4);
+    // The trunks' near faces: the paths' distance less a trunk's diameter.
+    EXPECT_NEAR(r.across, across - 0.09, 0.02);
+    EXPECT_NEAR(r.across_trunks, r.across, 1e-12);
+    EXPECT_NEAR(r.along, along, 0.05);
+    // Too few trunks for the rule: the assumption (1.2 m band: 6 cm short
+    // whatever the distance, where the trunks follow it).
+    RowRegistrationOptions more = same_row;
+    more.min_trunks = 5;
+    const Registration a = RegisterSidesOnRow(front, back, more);
+    EXPECT_EQ(a.across_from, Registration::Across::kAssumed);
+    EXPECT_TRUE(std::isnan(a.across_trunks));
+  }
+}
+
 TEST(RowRegistrationTest, TakesTheAcrossDistanceFromSharedFruit) {
   RowScene scene;
   scene.shared = 4;  // too few for the fruit registration (needs 5)
@@ -342,7 +427,7 @@ TEST(RowRegistrationTest, TakesTheAcrossDistanceFromSharedFruit) {
   RowSides(scene, BackToFrontTransform(0, 0.25, 5.1), &front, &back);
   EXPECT_THROW(RegisterSides(front, back, RegistrationOptions()), Error);
   const Registration r = RegisterSidesOnRow(front, back, RowRegistrationOptions());
-  EXPECT_FALSE(r.across_assumed);
+  EXPECT_EQ(r.across_from, Registration::Across::kFruit);
   EXPECT_EQ(r.matched, 4);
   EXPECT_NEAR(r.along, 0.25, 0.01);
   EXPECT_NEAR(r.across, 5.1, 0.01);

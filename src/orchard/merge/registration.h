@@ -8,6 +8,7 @@
 // height, then an iterative closest-point refinement on the matched centres.
 #pragma once
 
+#include <cmath>
 #include <utility>
 #include <vector>
 
@@ -79,7 +80,16 @@ struct Registration {
   bool has_profile = false;
   double correlation = 0;         // the canopy profiles' correlation at `along`
   double chance_correlation = 0;  // their best correlation 0.5 m or more away
-  bool across_assumed = false;    // across from the centre-plane assumption (no shared fruit)
+  // Where the distance across came from: the fruit both sides see, or,
+  // without it and on the user's word (--same-row), the trunks or the
+  // centre-plane assumption (row_registration.h).
+  enum class Across { kFruit, kTrunks, kAssumed };
+  Across across_from = Across::kFruit;
+  // The trunks' distance across (AcrossFromTrunks; NaN: too few trunks or
+  // no sparse points) and the trunks each side shows, also as a check on a
+  // distance the fruit gave.
+  double across_trunks = std::nan("");
+  int trunks_front = 0, trunks_back = 0;
   // The best alignment was not distinct from another but agreed with the
   // given poses, which settled it (RegisterSides with `given`).
   bool settled_by_given_poses = false;

@@ -259,7 +259,17 @@ std::string YieldReportHtml(const nlohmann::json& y, const std::vector<MapCluste
     << "<tr><td>residual (RMS distance of matched clusters)</td><td>" << Num(100 * a.at("residual_m").get<double>(), 1)
     << " cm</td></tr>"
     << "<tr><td>best match count of any other alignment</td><td>" << a.at("chance_matched").get<int>() << "</td></tr>"
-    << "<tr><td>overlap along the row</td><td>" << Num(a.at("overlap_m").get<double>(), 2) << " m</td></tr></table>\n";
+    << "<tr><td>overlap along the row</td><td>" << Num(a.at("overlap_m").get<double>(), 2) << " m</td></tr>";
+  if (a.contains("across_from"))
+    h << "<tr><td>distance across from</td><td>" << Escape(a.at("across_from").get<std::string>()) << "</td></tr>";
+  if (a.contains("trunks")) {
+    const auto& t = a.at("trunks");
+    h << "<tr><td>trunks found in the sparse points (front / back)</td><td>" << t.at("front").get<int>() << " / "
+      << t.at("back").get<int>();
+    if (t.contains("across_m")) h << "; they put the camera paths " << Num(t.at("across_m").get<double>(), 3) << " m apart";
+    h << "</td></tr>";
+  }
+  h << "</table>\n";
   if (!frames.empty()) {
     h << "<h2>Sample frames</h2>\n<p>Each 3D cluster's region outlined with its count; grey: removed (fallen apples, "
          "the next row, ...).</p>\n";

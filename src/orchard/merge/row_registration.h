@@ -6,13 +6,16 @@
 // comes from the canopy's direction in each row frame, the offset along the
 // row from correlating the two sides' canopy profiles (the row's ends and
 // gaps are seen from both sides), and the distance across from the fruit
-// clusters that both sides see, or, with too few, from an assumption (below).
+// clusters that both sides see, or, with too few, from the trunks both
+// sides' sparse points show, or from an assumption (below).
 // The heading is kept at the half turn: each row frame's x axis is fitted to
 // its camera path, and the paths run along the row.
 // Needs COLMAP's sparse points on both sides (given poses come without).
 #pragma once
 
+#include <cmath>
 #include <string>
+#include <vector>
 
 #include "orchard/merge/registration.h"
 #include "orchard/merge/side_cloud.h"
@@ -67,15 +70,44 @@ struct RowRegistrationOptions {
   double grid_step = 0.01;
   int min_matched = 3;
   double min_distinctness = 3;
-  // Otherwise each side is assumed to see into the canopy up to the row's
-  // centre plane: the centre lies at this quantile of the side's canopy
-  // points' distances (chosen on seed 11, the one row with COLMAP runs:
-  // 0.95 puts the sides 1 cm from the truth, 0.9 20 cm short).
+  // Otherwise, when the trunks (below) do not show, each side is assumed to
+  // see into the canopy up to the row's centre plane: the centre lies at this
+  // quantile of the side's canopy points' distances (chosen on seed 11, the
+  // one row with COLMAP runs: 0.95 puts the sides 1 cm from the truth, 0.9 20
+  // cm short; through a 0.5 m canopy it puts them 0.25-0.35 m too far apart).
   double centre_quantile = 0.95;
-  // That assumption holds for any row of the same planting: the sides of two
-  // different synthetic rows correlated 0.971 and 0.986, a row's own sides
-  // 0.944-0.993 (docs/yield.md). So without fruit seen from both sides the
-  // registration stops, unless the user says both videos film the same row.
+  // Trunks (FindTrunks), the measured alternative to that assumption: the
+  // sparse points under the canopy and above the grass, between these
+  // heights (m), from the canopy's face to `trunk_depth` (m) beyond it (past
+  // the centre of a 3 m canopy; the next row's trunks stand a row spacing
+  // farther), binned along the row every `trunk_bin` (m). A trunk is a peak
+  // of at least `min_trunk_points` points within `trunk_width` (m) of it and
+  // `trunk_contrast` times the band's median, the middle half of them spread
+  // over `min_trunk_span` (m) of height (a column: 0.047-0.24 m on the 123
+  // trunks of the rows below; a clod's lie within a few cm), at least
+  // `min_trunk_spacing` (m) from a stronger peak. On 16 synthetic rows
+  // (trunks 4.5 cm in radius with a stake, canopy from 0.5 m, COLMAP) this
+  // finds 3-4 of the 4 trunks on every side (docs/yield.md, "Trunks").
+  double trunk_min_height = 0.12;
+  double trunk_max_height = 0.45;
+  double trunk_depth = 1.5;
+  double trunk_bin = 0.05;
+  double trunk_width = 0.1;
+  int min_trunk_points = 8;
+  double trunk_contrast = 3;
+  double min_trunk_span = 0.04;
+  double min_trunk_spacing = 0.5;
+  // The distance across comes from the trunks when each side shows this
+  // many (the median of each side's trunks' distances).
+  int min_trunks = 2;
+  // `orchard yield` warns when the fruit's distance across and the trunks'
+  // differ by more than this (m): 0.5-6.3 cm on 16 COLMAP rows.
+  double max_trunk_disagreement = 0.25;
+  // That assumption, and the trunks, hold for any row of the same planting:
+  // the sides of two different synthetic rows correlated 0.971 and 0.986, a
+  // row's own sides 0.944-0.993 (docs/yield.md). So without fruit seen from
+  // both sides the registration stops, unless the user says both videos film
+  // the same row.
   bool assume_same_row = false;
   // Turn the back by the angle between the two sides' canopy lines instead
   // of keeping the half turn (off: on seed 11 the lines' angle was 0.97 deg,
@@ -84,6 +116,28 @@ struct RowRegistrationOptions {
   double max_heading_deg = 8;
   void Check() const;
 };
+
+// A tree trunk in a side's sparse points (row frame, m): where it stands
+// along the row, how far its near face is from the camera path, and the
+// points that show it.
+struct Trunk {
+  double along = 0;
+  double across = 0;
+  int points = 0;
+};
+
+// The trunks the side's sparse points show, ordered along the row; none
+// without sparse points (given poses) or canopy.
+std::vector<Trunk> FindTrunks(const SideCloud& side, const RowRegistrationOptions& options);
+
+// The distance between the two camera paths the trunks give: the median of
+// each side's trunks' distances, added (the sides face each other across
+// the trunks). NaN when a side shows fewer than options.min_trunks.
+struct TrunkAcross {
+  int front = 0, back = 0;  // trunks found
+  double across = std::nan("");
+};
+TrunkAcross AcrossFromTrunks(const SideCloud& front, const SideCloud& back, const RowRegistrationOptions& options);
 
 // What the levelling did to one side.
 struct Levelling {

@@ -134,8 +134,15 @@ Json AlignmentJson(const Registration& r, const std::string& method) {
   if (r.has_profile) j["profile_correlation"] = r.correlation;
   if (r.on_row) {
     j["chance_profile_correlation"] = r.chance_correlation;
-    j["across_from"] = r.across_assumed ? "assumed: each side sees into the canopy up to its centre plane"
-                                        : "fruit clusters seen from both sides";
+    j["across_from"] = r.across_from == Registration::Across::kAssumed
+                           ? "assumed: each side sees into the canopy up to its centre plane"
+                       : r.across_from == Registration::Across::kTrunks
+                           ? "trunks: each side's trunks in its sparse points"
+                           : "fruit clusters seen from both sides";
+  }
+  if (r.trunks_front > 0 || r.trunks_back > 0 || !std::isnan(r.across_trunks)) {
+    j["trunks"] = {{"front", r.trunks_front}, {"back", r.trunks_back}};
+    if (!std::isnan(r.across_trunks)) j["trunks"]["across_m"] = r.across_trunks;
   }
   return j;
 }
@@ -301,6 +308,17 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
       if (y.registration.back_scale != 1)
         spdlog::info("back side rescaled by {:.3f} to fit the front's fruit", y.registration.back_scale);
       back_cloud = std::move(scaled_back);
+      // The trunks' distance across, as a check on the fruit's (reported).
+      const TrunkAcross trunks = AcrossFromTrunks(front_cloud, back_cloud, row_options);
+      y.registration.across_trunks = trunks.across;
+      y.registration.trunks_front = trunks.front, y.registration.trunks_back = trunks.back;
+      if (std::abs(trunks.across - y.registration.across) > row_options.max_trunk_disagreement) {
+        const std::string w = "the fruit clusters put the camera paths " + std::to_string(y.registration.across) +
+                              " m apart, the trunks " + std::to_string(trunks.across) +
+                              " m: one of them is wrong (chance fruit matches, or posts taken for trunks)";
+        spdlog::warn("{}", w);
+        merge_warnings.push_back(w);
+      }
     } catch (const Error& fruit_error) {
       if (!o.row_registration || front_cloud.sparse.empty() || back_cloud.sparse.empty()) {
         // Given poses carry no sparse points for the row registration.
@@ -315,19 +333,22 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
       } catch (const Error& e) {
         fail_naming_broken_sides(e);
       }
+      const Registration::Across from = y.registration.across_from;
       method = "row: levelled grounds, canopy profiles along the row, " +
-               std::string(y.registration.across_assumed ? "across assumed (canopy centre plane)"
-                                                         : "across from shared fruit clusters");
+               std::string(from == Registration::Across::kAssumed ? "across assumed (canopy centre plane)"
+                           : from == Registration::Across::kTrunks ? "across from the trunks"
+                                                                   : "across from shared fruit clusters");
       // Only with --same-row (the row registration stops otherwise): rows of
-      // one planting have alike canopy profiles, so the count rests on the
-      // user's word.
-      if (y.registration.across_assumed) {
+      // one planting have alike canopy profiles and trunks, so the count
+      // rests on the user's word.
+      if (from != Registration::Across::kFruit) {
         const std::string w =
-            "no fruit clusters clearly seen from both sides: the sides were registered on the canopy's shape alone "
-            "(profile correlation " +
-            std::to_string(y.registration.correlation) +
-            "), taken as the same row on the user's word (--same-row); the canopy cannot tell this row from another "
-            "row of the same planting";
+            "no fruit clusters clearly seen from both sides: the sides were registered on the canopy's shape (profile "
+            "correlation " +
+            std::to_string(y.registration.correlation) + ")" +
+            (from == Registration::Across::kTrunks ? " and the trunks" : " alone") +
+            ", taken as the same row on the user's word (--same-row); neither tells this row from another row of "
+            "the same planting";
         spdlog::warn("{}", w);
         merge_warnings.push_back(w);
       }

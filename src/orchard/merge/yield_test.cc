@@ -13,6 +13,7 @@
 #include "orchard/core/file_io.h"
 #include "orchard/core/test_util.h"
 #include "orchard/merge/calibration.h"
+#include "orchard/merge/report.h"
 #include "orchard/merge/yield.h"
 #include "orchard/synth/synth.h"
 
@@ -115,6 +116,17 @@ TEST_F(YieldTest, MergesBothSidesAndResumes) {
   EXPECT_NE(ReadTextFile(*dir_ / "out/report.html").find("The frames reach the row: front "), std::string::npos);
   EXPECT_NE(ReadTextFile(*dir_ / "out/report.html").find("back frames' top edge at the row"), std::string::npos);
   EXPECT_EQ(ReadTextFile(*dir_ / "out/report.html").find("Where each side"), std::string::npos);  // not scored
+  // Given poses carry no sparse points, so no trunks; a run with COLMAP's
+  // says what the trunks found and where they put the sides.
+  EXPECT_FALSE(j.at("alignment").contains("trunks"));
+  {
+    nlohmann::json with_trunks = j;
+    with_trunks["alignment"]["trunks"] = {{"front", 4}, {"back", 3}, {"across_m", 5.0123}};
+    with_trunks["alignment"]["across_from"] = "trunks: each side's trunks in its sparse points";
+    const std::string html = YieldReportHtml(with_trunks, {}, {});
+    EXPECT_NE(html.find("4 / 3; they put the camera paths 5.012 m apart"), std::string::npos);
+    EXPECT_NE(html.find("<td>trunks: each side's trunks in its sparse points</td>"), std::string::npos);
+  }
 
   // Interrupted during the back side: its results and part of its cache are
   // gone, the front side's cache is complete.
