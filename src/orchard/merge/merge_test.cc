@@ -384,6 +384,42 @@ TEST(RowRegistrationTest, FindsTrunksUnderTheCanopy) {
   EXPECT_TRUE(std::isnan(AcrossFromTrunks(bare_front, back, o).across));
 }
 
+TEST(RowRegistrationTest, TreesFromBothSidesTrunks) {
+  auto trunks = [](std::vector<double> xs) {
+    std::vector<Trunk> t;
+    for (double x : xs) t.push_back({x, 2.5, 20});
+    return t;
+  };
+  // The back misses the last tree and sees one the front misses; the two
+  // sides' trunks of a tree are 4 cm apart.
+  const std::vector<RowTree> trees = TreesFromTrunks(trunks({0, 1.25, 3.75}), trunks({2.48, 1.21, -0.04}), 0.25);
+  ASSERT_EQ(trees.size(), 4u);
+  EXPECT_NEAR(trees[0].along, -0.02, 1e-12);
+  EXPECT_TRUE(trees[0].front && trees[0].back);
+  EXPECT_NEAR(trees[1].along, 1.23, 1e-12);
+  EXPECT_NEAR(trees[2].along, 2.48, 1e-12);
+  EXPECT_TRUE(!trees[2].front && trees[2].back);
+  EXPECT_NEAR(trees[3].along, 3.75, 1e-12);
+  EXPECT_TRUE(trees[3].front && !trees[3].back);
+  // Farther apart than the merge distance: two trees.
+  EXPECT_EQ(TreesFromTrunks(trunks({0}), trunks({0.3}), 0.25).size(), 2u);
+
+  // Each tree holds the row up to the midpoints; the ends reach half the
+  // inner spacing beyond the end trees.
+  const std::vector<RowTree> row = {{0, true, true}, {1.2, true, true}, {2.6, true, true}};
+  EXPECT_EQ(TreeAt(row, 0.59, 0.5), 0);
+  EXPECT_EQ(TreeAt(row, 0.61, 0.5), 1);
+  EXPECT_EQ(TreeAt(row, 1.89, 0.5), 1);
+  EXPECT_EQ(TreeAt(row, 1.91, 0.5), 2);
+  EXPECT_EQ(TreeAt(row, -0.59, 0.5), 0);
+  EXPECT_EQ(TreeAt(row, -0.61, 0.5), -1);
+  EXPECT_EQ(TreeAt(row, 3.29, 0.5), 2);
+  EXPECT_EQ(TreeAt(row, 3.31, 0.5), -1);
+  EXPECT_EQ(TreeAt({{1.0, true, false}}, 1.4, 0.5), 0);
+  EXPECT_EQ(TreeAt({{1.0, true, false}}, 1.6, 0.5), -1);
+  EXPECT_EQ(TreeAt({}, 0, 0.5), -1);
+}
+
 TEST(RowRegistrationTest, TakesTheAcrossDistanceFromTrunks) {
   // No shared fruit: the trunks measure the distance across where the
   // centre-plane assumption would guess it; still only on the user's word.

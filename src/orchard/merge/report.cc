@@ -147,6 +147,14 @@ std::string MapSvg(const nlohmann::json& y, const std::vector<MapCluster>& clust
     s << "<text x='" << Num(width - pad - 230) << "' y='" << Num(ty - 3 - 12 * static_cast<double>(i)) << "' font-size='11' fill='"
       << colour << "'>" << tops[i].first << " frames' top edge at the row</text>\n";
   }
+  // The trunks found (per_tree), from the ground to 0.5 m.
+  if (y.contains("per_tree"))
+    for (const auto& t : y.at("per_tree")) {
+      const double tx = pad + (t.at("along_m").get<double>() - x0) * sx;
+      s << "<line x1='" << Num(tx) << "' y1='" << map_h - pad << "' x2='" << Num(tx) << "' y2='"
+        << Num(map_h - pad - 0.5 * sy) << "' stroke='#753' stroke-width='4'><title>tree " << t.at("tree").get<int>()
+        << "</title></line>\n";
+    }
   for (const auto& c : clusters) {
     const std::string colour = c.shared > 0 ? "#d22" : (c.side == "front" ? "#2a7" : "#27c");
     s << "<circle cx='" << Num(pad + (c.along - x0) * sx) << "' cy='" << Num(map_h - pad - c.height * sy) << "' r='"
@@ -248,6 +256,22 @@ std::string YieldReportHtml(const nlohmann::json& y, const std::vector<MapCluste
            "film with its top in the frame (a taller frame, a higher or level camera).</p>\n";
   }
   h << "<h2>Map</h2>\n" << MapSvg(y, clusters);
+  if (y.contains("per_tree") && !y.at("per_tree").empty()) {
+    const bool calibrated_trees = y.contains("calibrated");
+    h << "<h2>Per tree</h2>\n<p>Trunks found in the sparse points (brown on the map); each tree holds the apples "
+         "between the midpoints to its neighbours.</p>\n<table><tr><th>tree</th><th>along the row</th><th>trunk seen "
+         "from</th><th>apples</th>"
+      << (calibrated_trees ? "<th>calibrated</th>" : "") << "</tr>\n";
+    for (const auto& t : y.at("per_tree")) {
+      h << "<tr><td>" << t.at("tree").get<int>() << "</td><td>" << Num(t.at("along_m").get<double>(), 2)
+        << " m</td><td>" << Escape(t.at("trunk_seen_from").get<std::string>()) << "</td><td>"
+        << Num(t.at("count").get<double>(), 0) << "</td>";
+      if (calibrated_trees) h << "<td>" << Num(t.value("calibrated", 0.0), 0) << "</td>";
+      h << "</tr>\n";
+    }
+    h << "<tr><td>outside the trees</td><td></td><td></td><td>" << Num(y.value("per_tree_outside", 0.0), 0)
+      << "</td>" << (calibrated_trees ? "<td></td>" : "") << "</tr></table>\n";
+  }
   const auto& a = y.at("alignment");
   h << "<h2>Alignment of the two sides</h2>\n<table>"
     << "<tr><td>method</td><td>" << Escape(a.at("method").get<std::string>()) << "</td></tr>"

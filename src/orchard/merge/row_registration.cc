@@ -241,6 +241,41 @@ TrunkAcross AcrossFromTrunks(const SideCloud& front, const SideCloud& back, cons
   return t;
 }
 
+std::vector<RowTree> TreesFromTrunks(const std::vector<Trunk>& front, const std::vector<Trunk>& back_in_front,
+                                     double merge_distance) {
+  std::vector<RowTree> trees;
+  for (const auto& t : front) trees.push_back({t.along, true, false});
+  for (const auto& t : back_in_front) {
+    RowTree* nearest = nullptr;
+    for (auto& tree : trees)
+      if (tree.front && !tree.back && std::abs(tree.along - t.along) <= merge_distance &&
+          (!nearest || std::abs(tree.along - t.along) < std::abs(nearest->along - t.along)))
+        nearest = &tree;
+    if (nearest)
+      nearest->along = 0.5 * (nearest->along + t.along), nearest->back = true;
+    else
+      trees.push_back({t.along, false, true});
+  }
+  std::sort(trees.begin(), trees.end(), [](const RowTree& a, const RowTree& b) { return a.along < b.along; });
+  return trees;
+}
+
+int TreeAt(const std::vector<RowTree>& trees, double along, double lone_half_width) {
+  const int n = static_cast<int>(trees.size());
+  if (n == 0) return -1;
+  int k = 0;
+  for (int i = 1; i < n; ++i)
+    if (std::abs(trees[i].along - along) < std::abs(trees[k].along - along)) k = i;
+  const bool before = along < trees[k].along;
+  double half = lone_half_width;
+  if (n > 1) {
+    // The spacing on the position's side, or at the row's ends the inner one.
+    const int neighbour = before ? (k > 0 ? k - 1 : k + 1) : (k < n - 1 ? k + 1 : k - 1);
+    half = 0.5 * std::abs(trees[k].along - trees[neighbour].along);
+  }
+  return std::abs(along - trees[k].along) <= half ? k : -1;
+}
+
 Levelling LevelOnSparseGround(SideCloud* side, const RowRegistrationOptions& o) {
   o.Check();
   Levelling l;

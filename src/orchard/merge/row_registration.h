@@ -139,6 +139,26 @@ struct TrunkAcross {
 };
 TrunkAcross AcrossFromTrunks(const SideCloud& front, const SideCloud& back, const RowRegistrationOptions& options);
 
+// A tree of the row, from the trunks: where it stands along the row (front
+// row frame, m) and which sides show its trunk.
+struct RowTree {
+  double along = 0;
+  bool front = false, back = false;
+};
+
+// The row's trees from both sides' trunks, the back's already in the front
+// frame (Trunk::along only is read): trunks of the two sides within
+// `merge_distance` (m) along the row are one tree, at their mean; ordered
+// along the row.
+std::vector<RowTree> TreesFromTrunks(const std::vector<Trunk>& front, const std::vector<Trunk>& back_in_front,
+                                     double merge_distance);
+
+// The tree a position along the row belongs to: the nearest, if it lies
+// within half the spacing to the next tree on that side (at the row's ends
+// the spacing on the inner side; a lone tree `lone_half_width`); -1 when
+// none.
+int TreeAt(const std::vector<RowTree>& trees, double along, double lone_half_width);
+
 // What the levelling did to one side.
 struct Levelling {
   bool changed = false;

@@ -429,6 +429,31 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
     }
   }
 
+  // Per tree, where the sides' sparse points show the trunks: each
+  // cluster's share as in the per-metre bins, to the tree whose stretch of
+  // row holds it (midway to the neighbouring trees).
+  Json per_tree = Json::array();
+  double per_tree_outside = 0;
+  {
+    std::vector<Trunk> back_trunks = FindTrunks(back_cloud, row_options);
+    for (auto& t : back_trunks)
+      t.along = (y.registration.back_to_front * Eigen::Vector3d(t.along, t.across, 0)).x();
+    const std::vector<RowTree> trees =
+        TreesFromTrunks(FindTrunks(front_cloud, row_options), back_trunks, 0.5 * row_options.min_trunk_spacing);
+    std::vector<double> sum(trees.size(), 0);
+    for (const auto& m : map) {
+      const int k = TreeAt(trees, m.along, 0.5 * o.bin_length);
+      (k >= 0 ? sum[k] : per_tree_outside) += m.count - 0.5 * m.shared;
+    }
+    for (size_t k = 0; k < trees.size(); ++k) {
+      per_tree.push_back({{"tree", k},
+                          {"along_m", trees[k].along},
+                          {"trunk_seen_from", trees[k].front && trees[k].back ? "both" : trees[k].front ? "front" : "back"},
+                          {"count", std::round(sum[k] * 10) / 10}});
+      if (!in.calibration.empty()) per_tree.back()["calibrated"] = std::round(sum[k] * calibration.factor * 10) / 10;
+    }
+  }
+
   Json warnings = Json::array();
   for (const SideCloud* cloud : {&front_cloud, &back_cloud})
     for (const auto& w : cloud->warnings) warnings.push_back(cloud->name + ": " + w);
@@ -460,11 +485,13 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
                               "front and back above are each side's own count (orchard side's rules)"}}},
       {"per_metre", per_metre},
       {"bin_length_m", o.bin_length},
+      {"per_tree", per_tree},
       {"alignment", AlignmentJson(y.registration, method)},
       {"sides", {{"front", SideJson(y.front_side, front_cloud, front)}, {"back", SideJson(y.back_side, back_cloud, back)}}},
       {"warnings", warnings},
       {"version", ORCHARD_VERSION},
   };
+  if (!per_tree.empty()) j["per_tree_outside"] = std::round(per_tree_outside * 10) / 10;
   j["alignment"]["matched_fallen"] = matched_fallen;
   if (!given_check.is_null()) j["alignment"]["minus_given_poses"] = given_check;
   if (!levelling.empty()) j["alignment"]["levelling"] = levelling;

@@ -119,13 +119,21 @@ TEST_F(YieldTest, MergesBothSidesAndResumes) {
   // Given poses carry no sparse points, so no trunks; a run with COLMAP's
   // says what the trunks found and where they put the sides.
   EXPECT_FALSE(j.at("alignment").contains("trunks"));
+  EXPECT_TRUE(j.at("per_tree").empty());
+  EXPECT_FALSE(j.contains("per_tree_outside"));
+  EXPECT_EQ(ReadTextFile(*dir_ / "out/report.html").find("Per tree"), std::string::npos);
   {
     nlohmann::json with_trunks = j;
     with_trunks["alignment"]["trunks"] = {{"front", 4}, {"back", 3}, {"across_m", 5.0123}};
     with_trunks["alignment"]["across_from"] = "trunks: each side's trunks in its sparse points";
+    with_trunks["per_tree"] = {{{"tree", 0}, {"along_m", -0.61}, {"trunk_seen_from", "both"}, {"count", 57.4}},
+                               {{"tree", 1}, {"along_m", 0.64}, {"trunk_seen_from", "front"}, {"count", 61.0}}};
+    with_trunks["per_tree_outside"] = 2.5;
     const std::string html = YieldReportHtml(with_trunks, {}, {});
     EXPECT_NE(html.find("4 / 3; they put the camera paths 5.012 m apart"), std::string::npos);
     EXPECT_NE(html.find("<td>trunks: each side's trunks in its sparse points</td>"), std::string::npos);
+    EXPECT_NE(html.find("<tr><td>1</td><td>0.64 m</td><td>front</td><td>61</td></tr>"), std::string::npos);
+    EXPECT_NE(html.find("<title>tree 1</title>"), std::string::npos);
   }
 
   // Interrupted during the back side: its results and part of its cache are
