@@ -214,12 +214,13 @@ std::vector<Trunk> FindTrunks(const SideCloud& side, const RowRegistrationOption
     double centre = x_min + (i + 0.5) * o.trunk_bin;
     std::vector<double> xs, ys, zs;
     for (int pass = 0; pass < 2; ++pass) {
-      if (pass == 1) centre = Quantile(xs, 0.5);
+      if (pass == 1 && !xs.empty()) centre = Quantile(xs, 0.5);
       xs.clear(), ys.clear(), zs.clear();
       for (const auto& p : band)
         if (std::abs(p.x() - centre) <= o.trunk_width) xs.push_back(p.x()), ys.push_back(p.y()), zs.push_back(p.z());
     }
-    const bool column = Quantile(zs, 0.75) - Quantile(zs, 0.25) >= o.min_trunk_span;
+    const bool column = static_cast<int>(xs.size()) >= o.min_trunk_points &&
+                        Quantile(zs, 0.75) - Quantile(zs, 0.25) >= o.min_trunk_span;
     taken.emplace_back(i, column ? o.min_trunk_spacing : o.trunk_width + 0.5 * o.trunk_bin);
     if (column) trunks.push_back({Quantile(xs, 0.5), Quantile(ys, 0.5), static_cast<int>(xs.size())});
   }
