@@ -258,19 +258,36 @@ std::string YieldReportHtml(const nlohmann::json& y, const std::vector<MapCluste
   h << "<h2>Map</h2>\n" << MapSvg(y, clusters);
   if (y.contains("per_tree") && !y.at("per_tree").empty()) {
     const bool calibrated_trees = y.contains("calibrated");
+    // The generator's trees, when the truth was given and the counts of trees agree.
+    const nlohmann::json* true_trees = y.contains("truth") && y.at("truth").contains("per_tree") ? &y.at("truth").at("per_tree") : nullptr;
     h << "<h2>Per tree</h2>\n<p>Trunks found in the sparse points (brown on the map); each tree holds the apples "
          "between the midpoints to its neighbours.</p>\n<table><tr><th>tree</th><th>along the row</th><th>trunk seen "
          "from</th><th>apples</th>"
-      << (calibrated_trees ? "<th>calibrated</th>" : "") << "</tr>\n";
+      << (calibrated_trees ? "<th>calibrated</th>" : "")
+      << (true_trees ? "<th>visible (truth)</th><th>of visible</th><th>harvested (truth)</th>" : "") << "</tr>\n";
+    size_t k = 0;
     for (const auto& t : y.at("per_tree")) {
       h << "<tr><td>" << t.at("tree").get<int>() << "</td><td>" << Num(t.at("along_m").get<double>(), 2)
         << " m</td><td>" << Escape(t.at("trunk_seen_from").get<std::string>()) << "</td><td>"
         << Num(t.at("count").get<double>(), 0) << "</td>";
       if (calibrated_trees) h << "<td>" << Num(t.value("calibrated", 0.0), 0) << "</td>";
+      if (true_trees && k < true_trees->size()) {
+        const auto& tt = (*true_trees)[k];
+        h << "<td>" << Num(tt.at("visible_any").get<double>(), 0) << "</td><td>"
+          << (tt.contains("percent_of_visible_any") ? Num(tt.at("percent_of_visible_any").get<double>()) + "%" : "-")
+          << "</td><td>" << Num(tt.at("harvested").get<double>(), 0) << "</td>";
+      }
       h << "</tr>\n";
+      ++k;
     }
     h << "<tr><td>outside the trees</td><td></td><td></td><td>" << Num(y.value("per_tree_outside", 0.0), 0)
-      << "</td>" << (calibrated_trees ? "<td></td>" : "") << "</tr></table>\n";
+      << "</td>" << (calibrated_trees ? "<td></td>" : "") << (true_trees ? "<td></td><td></td><td></td>" : "")
+      << "</tr></table>\n";
+    if (true_trees && y.at("truth").contains("per_tree_mean_abs_error_percent"))
+      h << "<p>Per-tree error against the visible apples of each tree (the generator's trees in order along the row): "
+        << Num(y.at("truth").at("per_tree_mean_abs_error_percent").get<double>()) << "% on average.</p>\n";
+    else if (y.contains("truth") && y.at("truth").contains("per_tree_note"))
+      h << "<p>" << Escape(y.at("truth").at("per_tree_note").get<std::string>()) << "</p>\n";
   }
   const auto& a = y.at("alignment");
   h << "<h2>Alignment of the two sides</h2>\n<table>"

@@ -545,6 +545,26 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
       truth["total_percent_of_visible_any"] = 100.0 * y.total / visible;
       truth["sum_of_sides_percent_of_visible_any"] = 100.0 * y.sum_of_sides / visible;
     }
+    // Per tree: the generator's trees stand in order along the front
+    // camera's path (it films along +x), as the trunks found do.
+    if (!per_tree.empty() && t.contains("per_tree")) {
+      const Json& trees = t.at("per_tree");
+      if (trees.size() != per_tree.size()) {
+        truth["per_tree_note"] = std::to_string(per_tree.size()) + " trees found, " + std::to_string(trees.size()) +
+                                 " in the truth: not compared";
+      } else {
+        Json compared = Json::array();
+        double abs_sum = 0;
+        int n = 0;
+        for (size_t k = 0; k < trees.size(); ++k) {
+          const double v = trees[k].value("visible_any", 0.0), c = per_tree[k].at("count").get<double>();
+          compared.push_back({{"tree", k}, {"count", c}, {"visible_any", v}, {"harvested", trees[k].value("harvested", 0.0)}});
+          if (v > 0) compared.back()["percent_of_visible_any"] = 100.0 * c / v, abs_sum += 100.0 * std::abs(c - v) / v, ++n;
+        }
+        truth["per_tree"] = compared;
+        if (n > 0) truth["per_tree_mean_abs_error_percent"] = abs_sum / n;
+      }
+    }
     if (!front.truth.empty() && !back.truth.empty()) truth["merge"] = MergeTruthJson(front, back, front_cloud.clusters,
                                                                                    back_in_front, shared);
     j["truth"] = truth;

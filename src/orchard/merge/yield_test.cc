@@ -134,6 +134,14 @@ TEST_F(YieldTest, MergesBothSidesAndResumes) {
     EXPECT_NE(html.find("<td>trunks: each side's trunks in its sparse points</td>"), std::string::npos);
     EXPECT_NE(html.find("<tr><td>1</td><td>0.64 m</td><td>front</td><td>61</td></tr>"), std::string::npos);
     EXPECT_NE(html.find("<title>tree 1</title>"), std::string::npos);
+    // With the generator's trees beside them.
+    with_trunks["truth"]["per_tree"] = {
+        {{"tree", 0}, {"count", 57.4}, {"visible_any", 56}, {"harvested", 60}, {"percent_of_visible_any", 102.5}},
+        {{"tree", 1}, {"count", 61.0}, {"visible_any", 50}, {"harvested", 58}, {"percent_of_visible_any", 122.0}}};
+    with_trunks["truth"]["per_tree_mean_abs_error_percent"] = 12.34;
+    const std::string scored = YieldReportHtml(with_trunks, {}, {});
+    EXPECT_NE(scored.find("<td>61</td><td>50</td><td>122.0%</td><td>58</td></tr>"), std::string::npos);
+    EXPECT_NE(scored.find("12.3% on average"), std::string::npos);
   }
 
   // Interrupted during the back side: its results and part of its cache are
