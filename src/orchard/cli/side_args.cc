@@ -113,6 +113,10 @@ void AddSideOptions(CLI::App* cmd, SideOptions* options) {
   cmd->add_option("--row-min-share", o.clusters.row_min_share,
                   "Row distance estimate: the nearest stretch of fruit holding this share of the fullest one's")
       ->capture_default_str();
+  cmd->add_option("--row-min-apple-share", o.clusters.row_min_apple_share,
+                  "... and this share of the apples of the stretch that holds the most (near the camera, chance "
+                  "pairings show many pixels for few apples)")
+      ->capture_default_str();
   cmd->add_option("--next-row-gap", o.clusters.next_row_gap,
                   "Next row: behind the middle of the first fruit-free gap this long (m) behind the row, 0 = margin")
       ->capture_default_str();

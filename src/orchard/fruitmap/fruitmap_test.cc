@@ -161,28 +161,40 @@ void AddPoints(std::vector<double>* d, double from, double to, int points) {
 }
 
 TEST(RowFruitDistance, TakesTheNearestStretchOfFruitHoldingEnoughOfIt) {
-  // (distance, pixels) of kept clusters, spread over 25 cm bands.
-  const auto stretch = [](std::vector<std::pair<double, double>>* d, double from, double to, double densest_at,
-                          double pixels) {
+  // Kept clusters spread over 25 cm bands: (distance, pixels, apples).
+  const auto stretch = [](std::vector<RowFruit>* d, double from, double to, double densest_at, double pixels,
+                          double apples) {
     for (double x = from + 0.125; x < to; x += 0.25)
-      d->emplace_back(x, std::abs(x - densest_at) < 0.1 ? pixels : pixels / 4);
+      d->push_back({x, std::abs(x - densest_at) < 0.1 ? pixels : pixels / 4, apples});
   };
   // One tree filmed: the next row (5.5-6.5 m) holds more fruit pixels than
   // the tree (2.0-3.0 m), and its densest band more than the tree's.
-  std::vector<std::pair<double, double>> one_tree;
-  stretch(&one_tree, 2.0, 3.0, 2.125, 4000);
-  stretch(&one_tree, 5.5, 6.5, 5.625, 5000);
-  EXPECT_DOUBLE_EQ(RowFruitDistance(one_tree, 1.0, 0.01, 0.5), 2.125);
+  std::vector<RowFruit> one_tree;
+  stretch(&one_tree, 2.0, 3.0, 2.125, 4000, 10);
+  stretch(&one_tree, 5.5, 6.5, 5.625, 5000, 30);
+  EXPECT_DOUBLE_EQ(RowFruitDistance(one_tree, 1.0, 0.01, 0.5, 0.25), 2.125);
   // The densest band alone (no aisle to split at) takes the next row.
-  EXPECT_DOUBLE_EQ(RowFruitDistance(one_tree, 0, 0.01, 0.5), 5.625);
+  EXPECT_DOUBLE_EQ(RowFruitDistance(one_tree, 0, 0.01, 0.5, 0.25), 5.625);
   // Chance pairings in front of the row holding a third of its pixels are not the row.
-  std::vector<std::pair<double, double>> chance;
-  stretch(&chance, 0.0, 1.0, 0.625, 8000);
-  stretch(&chance, 2.0, 3.0, 2.375, 24000);
-  EXPECT_DOUBLE_EQ(RowFruitDistance(chance, 1.0, 0.01, 0.5), 2.375);
+  std::vector<RowFruit> chance;
+  stretch(&chance, 0.0, 1.0, 0.625, 8000, 2);
+  stretch(&chance, 2.0, 3.0, 2.375, 24000, 40);
+  EXPECT_DOUBLE_EQ(RowFruitDistance(chance, 1.0, 0.01, 0.5, 0.25), 2.375);
   // ... unless a third is enough.
-  EXPECT_DOUBLE_EQ(RowFruitDistance(chance, 1.0, 0.01, 0.3), 0.625);
-  EXPECT_EQ(RowFruitDistance({}, 1.0, 0.01, 0.5), 0);
+  EXPECT_DOUBLE_EQ(RowFruitDistance(chance, 1.0, 0.01, 0.3, 0), 0.625);
+  // Near the camera they can outweigh the row by pixels (seed 497's back),
+  // never by apples.
+  std::vector<RowFruit> near;
+  stretch(&near, 0.25, 1.25, 0.625, 30000, 5);
+  stretch(&near, 2.25, 2.75, 2.375, 24000, 80);
+  EXPECT_DOUBLE_EQ(RowFruitDistance(near, 1.0, 0.01, 0.5, 0.25), 2.375);
+  EXPECT_DOUBLE_EQ(RowFruitDistance(near, 1.0, 0.01, 0.5, 0), 0.625);  // by pixels alone
+  // No stretch holds enough of both: the one with the most pixels.
+  std::vector<RowFruit> split;
+  stretch(&split, 0.25, 1.25, 0.625, 30000, 5);
+  stretch(&split, 2.25, 2.75, 2.375, 2000, 80);
+  EXPECT_DOUBLE_EQ(RowFruitDistance(split, 1.0, 0.01, 0.5, 0.25), 0.625);
+  EXPECT_EQ(RowFruitDistance({}, 1.0, 0.01, 0.5, 0.25), 0);
 }
 
 TEST(NextRowGapCut, CutsInTheMiddleOfTheAisleBetweenTheRowAndTheNextRow) {

@@ -54,36 +54,44 @@ constexpr double kDistanceBand = 0.25;
 
 }  // namespace
 
-double RowFruitDistance(const std::vector<std::pair<double, double>>& distance_pixels, double gap,
-                        double sparse_fraction, double min_share) {
-  std::map<int, double> bands;
-  for (const auto& [d, pixels] : distance_pixels)
-    if (d > 0) bands[static_cast<int>(d / kDistanceBand)] += pixels;
+double RowFruitDistance(const std::vector<RowFruit>& fruit, double gap, double sparse_fraction, double min_share,
+                        double min_apple_share) {
+  std::map<int, std::pair<double, double>> bands;  // band -> pixels, apples
+  for (const auto& f : fruit)
+    if (f.distance > 0) {
+      auto& b = bands[static_cast<int>(f.distance / kDistanceBand)];
+      b.first += f.pixels, b.second += f.apples;
+    }
   if (bands.empty()) return 0;
   double fullest = 0;
-  for (const auto& [band, pixels] : bands) fullest = std::max(fullest, pixels);
+  for (const auto& [band, b] : bands) fullest = std::max(fullest, b.first);
   // Stretches of fruit: runs of bands above the sparse level, split where
   // at least `gap` m of sparse bands lie between two of them.
   struct Stretch {
-    double pixels = 0, densest_pixels = -1;
+    double pixels = 0, apples = 0, densest_pixels = -1;
     int densest = 0;
   };
   std::vector<Stretch> stretches;
   int previous = 0;
-  for (const auto& [band, pixels] : bands) {
+  for (const auto& [band, b] : bands) {
+    const double pixels = b.first;
     if (pixels <= sparse_fraction * fullest) continue;
     if (stretches.empty() || (gap > 0 && (band - previous - 1) * kDistanceBand >= gap - 1e-9))
       stretches.emplace_back();
     Stretch& s = stretches.back();
-    s.pixels += pixels;
+    s.pixels += pixels, s.apples += b.second;
     if (pixels > s.densest_pixels) s.densest_pixels = pixels, s.densest = band;
     previous = band;
   }
-  double most = 0;
-  for (const auto& s : stretches) most = std::max(most, s.pixels);
+  double most = 0, most_apples = 0;
+  for (const auto& s : stretches) most = std::max(most, s.pixels), most_apples = std::max(most_apples, s.apples);
   for (const auto& s : stretches)
-    if (s.pixels >= min_share * most) return (s.densest + 0.5) * kDistanceBand;
-  return 0;  // not reached: the fullest stretch qualifies
+    if (s.pixels >= min_share * most && s.apples >= min_apple_share * most_apples)
+      return (s.densest + 0.5) * kDistanceBand;
+  // No stretch holds enough of both: the one with the most pixels.
+  for (const auto& s : stretches)
+    if (s.pixels >= most) return (s.densest + 0.5) * kDistanceBand;
+  return 0;  // not reached
 }
 
 std::optional<double> NextRowGapCut(const std::vector<double>& point_distances, double row_distance, double gap,
@@ -194,6 +202,8 @@ void ClusterOptions::Check() const {
   ORCHARD_CHECK_OPTION(row_distance >= 0, "row distance must be >= 0, got ", row_distance);
   ORCHARD_CHECK_OPTION(row_min_share > 0 && row_min_share <= 1, "row min share must be in (0, 1], got ",
                        row_min_share);
+  ORCHARD_CHECK_OPTION(row_min_apple_share >= 0 && row_min_apple_share <= 1,
+                       "row min apple share must be in [0, 1], got ", row_min_apple_share);
   ORCHARD_CHECK_OPTION(next_row_gap >= 0, "next-row gap must be >= 0, got ", next_row_gap);
   ORCHARD_CHECK_OPTION(next_row_sparse >= 0 && next_row_sparse < 1, "next-row sparse fraction must be in [0, 1), got ",
                        next_row_sparse);
@@ -356,7 +366,7 @@ ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std
   r.row_across = across;
   r.row_along = across.cross(r.row_up).normalized();
   r.row_origin = mean - ground.normal * ground.SignedDistance(mean);
-  std::vector<std::pair<double, double>> tree_distances;  // distance, pixels
+  std::vector<RowFruit> tree_distances;
   for (auto& c : r.clusters) {
     // Both rules' counts; the frames of the one the options chose.
     const bool by_count = o.best_views_by == ClusterOptions::BestViews::kCount;
@@ -368,14 +378,17 @@ ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std
     c.status = EvidenceStatus(c, o);
     if (c.status == "kept" && c.height < o.fallen_height) c.status = "fallen";
     if (c.status == "kept")
-      tree_distances.emplace_back(
-          c.distance, std::max_element(c.views.begin(), c.views.end(), [](const auto& a, const auto& b) {
-                        return a.pixels < b.pixels;
-                      })->pixels);
+      tree_distances.push_back(
+          {c.distance,
+           static_cast<double>(std::max_element(c.views.begin(), c.views.end(), [](const auto& a, const auto& b) {
+                                 return a.pixels < b.pixels;
+                               })->pixels),
+           static_cast<double>(c.count)});
   }
   r.row_distance = o.row_distance > 0
                        ? o.row_distance
-                       : RowFruitDistance(tree_distances, o.next_row_gap, o.next_row_sparse, o.row_min_share);
+                       : RowFruitDistance(tree_distances, o.next_row_gap, o.next_row_sparse, o.row_min_share,
+                                          o.row_min_apple_share);
   std::vector<double> point_distances;
   for (const auto& c : r.clusters)
     if (c.status == "kept")

@@ -118,9 +118,16 @@ struct ClusterOptions {
   // pixels than the tree's (the tree's 0.70-0.91 of it; seed 5's front
   // counted 188 for 52 visible). Chance pairings in front of the row held
   // 0.33 of the row's (U-Net blobs, flat green seed 295): 0.5 lies between.
-  // 81 four-tree rows count as with the densest band (docs/side.md).
+  // 81 four-tree rows count as with the densest band (docs/side.md). Near
+  // the camera a chance pairing's blobs show many pixels for few apples
+  // (fresh flat seed 497's back: 21 apples 0.4-1.3 m away held 0.55 of the
+  // row's pixels; 27 counted for 256 visible), so a stretch must also hold
+  // row_min_apple_share of the most apples any stretch holds: those 21 were
+  // 0.12 of the row's, one tree's apples 0.21-0.23 of the next row's (exact
+  // masks, seed 5, the dense-frames test); 0.15 lies between.
   double row_distance = 0;
   double row_min_share = 0.5;
+  double row_min_apple_share = 0.15;
   // Where the next row begins. Binned by distance (25 cm) behind the row
   // distance, the fruit points of the clusters that pass the evidence checks
   // show the filmed row, then an empty aisle, then the next row: on 46
@@ -195,10 +202,18 @@ struct ClusterResult {
 std::optional<double> NextRowGapCut(const std::vector<double>& point_distances, double row_distance, double gap,
                                     double sparse_fraction);
 
+// A kept cluster as RowFruitDistance sees it: its distance from the camera
+// path, its largest view's fruit pixels and its apples.
+struct RowFruit {
+  double distance = 0;
+  double pixels = 0;
+  double apples = 0;
+};
+
 // The filmed row's distance from the camera path (ClusterOptions::
-// row_distance) from (distance, pixels) pairs of kept clusters; 0 when none.
-double RowFruitDistance(const std::vector<std::pair<double, double>>& distance_pixels, double gap,
-                        double sparse_fraction, double min_share);
+// row_distance) from the kept clusters; 0 when none.
+double RowFruitDistance(const std::vector<RowFruit>& fruit, double gap, double sparse_fraction, double min_share,
+                        double min_apple_share);
 
 // "kept", or why the cluster's own evidence (points, views, votes; not its
 // place in the row) is too weak: too_few_points, no_views, few_views, ghost.
