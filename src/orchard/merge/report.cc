@@ -259,7 +259,8 @@ std::string YieldReportHtml(const nlohmann::json& y, const std::vector<MapCluste
   if (y.contains("per_tree") && !y.at("per_tree").empty()) {
     const bool calibrated_trees = y.contains("calibrated");
     // The generator's trees, when the truth was given and the counts of trees agree.
-    const nlohmann::json* true_trees = y.contains("truth") && y.at("truth").contains("per_tree") ? &y.at("truth").at("per_tree") : nullptr;
+    const nlohmann::json* true_trees =
+        y.contains("truth") && y.at("truth").contains("per_tree") ? &y.at("truth").at("per_tree") : nullptr;
     h << "<h2>Per tree</h2>\n<p>Trunks found in the sparse points (brown on the map); each tree holds the apples "
          "between the midpoints to its neighbours.</p>\n<table><tr><th>tree</th><th>along the row</th><th>trunk seen "
          "from</th><th>apples</th>"

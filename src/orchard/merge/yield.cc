@@ -448,7 +448,9 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
     for (size_t k = 0; k < trees.size(); ++k) {
       per_tree.push_back({{"tree", k},
                           {"along_m", trees[k].along},
-                          {"trunk_seen_from", trees[k].front && trees[k].back ? "both" : trees[k].front ? "front" : "back"},
+                          {"trunk_seen_from", trees[k].front && trees[k].back ? "both"
+                                              : trees[k].front               ? "front"
+                                                                             : "back"},
                           {"count", std::round(sum[k] * 10) / 10}});
       if (!in.calibration.empty()) per_tree.back()["calibrated"] = std::round(sum[k] * calibration.factor * 10) / 10;
     }
@@ -558,8 +560,12 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
         int n = 0;
         for (size_t k = 0; k < trees.size(); ++k) {
           const double v = trees[k].value("visible_any", 0.0), c = per_tree[k].at("count").get<double>();
-          compared.push_back({{"tree", k}, {"count", c}, {"visible_any", v}, {"harvested", trees[k].value("harvested", 0.0)}});
-          if (v > 0) compared.back()["percent_of_visible_any"] = 100.0 * c / v, abs_sum += 100.0 * std::abs(c - v) / v, ++n;
+          compared.push_back(
+              {{"tree", k}, {"count", c}, {"visible_any", v}, {"harvested", trees[k].value("harvested", 0.0)}});
+          if (v > 0) {
+            compared.back()["percent_of_visible_any"] = 100.0 * c / v;
+            abs_sum += 100.0 * std::abs(c - v) / v, ++n;
+          }
         }
         truth["per_tree"] = compared;
         if (n > 0) truth["per_tree_mean_abs_error_percent"] = abs_sum / n;
