@@ -366,7 +366,7 @@ ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std
   r.row_across = across;
   r.row_along = across.cross(r.row_up).normalized();
   r.row_origin = mean - ground.normal * ground.SignedDistance(mean);
-  std::vector<RowFruit> tree_distances;
+  std::vector<RowFruit> row_fruit;
   for (auto& c : r.clusters) {
     // Both rules' counts; the frames of the one the options chose.
     const bool by_count = o.best_views_by == ClusterOptions::BestViews::kCount;
@@ -378,7 +378,7 @@ ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std
     c.status = EvidenceStatus(c, o);
     if (c.status == "kept" && c.height < o.fallen_height) c.status = "fallen";
     if (c.status == "kept")
-      tree_distances.push_back(
+      row_fruit.push_back(
           {c.distance,
            static_cast<double>(std::max_element(c.views.begin(), c.views.end(), [](const auto& a, const auto& b) {
                                  return a.pixels < b.pixels;
@@ -387,7 +387,7 @@ ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std
   }
   r.row_distance = o.row_distance > 0
                        ? o.row_distance
-                       : RowFruitDistance(tree_distances, o.next_row_gap, o.next_row_sparse, o.row_min_share,
+                       : RowFruitDistance(row_fruit, o.next_row_gap, o.next_row_sparse, o.row_min_share,
                                           o.row_min_apple_share);
   std::vector<double> point_distances;
   for (const auto& c : r.clusters)

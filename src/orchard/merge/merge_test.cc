@@ -381,7 +381,7 @@ TEST(RowRegistrationTest, FindsTrunksUnderTheCanopy) {
   // Given poses: no sparse points, no trunks.
   bare_front.sparse.clear();
   EXPECT_TRUE(FindTrunks(bare_front, o).empty());
-  EXPECT_TRUE(std::isnan(AcrossFromTrunks(bare_front, back, o).across));
+  EXPECT_TRUE(std::isnan(AcrossFromTrunks(FindTrunks(bare_front, o), FindTrunks(back, o), o).across));
 }
 
 TEST(RowRegistrationTest, TreesFromBothSidesTrunks) {

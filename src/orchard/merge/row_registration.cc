@@ -228,9 +228,9 @@ std::vector<Trunk> FindTrunks(const SideCloud& side, const RowRegistrationOption
   return trunks;
 }
 
-TrunkAcross AcrossFromTrunks(const SideCloud& front, const SideCloud& back, const RowRegistrationOptions& o) {
+TrunkAcross AcrossFromTrunks(const std::vector<Trunk>& tf, const std::vector<Trunk>& tb,
+                             const RowRegistrationOptions& o) {
   TrunkAcross t;
-  const std::vector<Trunk> tf = FindTrunks(front, o), tb = FindTrunks(back, o);
   t.front = static_cast<int>(tf.size()), t.back = static_cast<int>(tb.size());
   if (t.front < o.min_trunks || t.back < o.min_trunks) return t;
   auto median_across = [](const std::vector<Trunk>& trunks) {
@@ -443,7 +443,7 @@ Registration RegisterSidesOnRow(const SideCloud& front, const SideCloud& back, c
     if (best_fit.matched > 0 && std::abs(a - best_fit.across) > 0.25) chance = std::max(chance, m);
   double across;
   Registration::Across across_from = Registration::Across::kFruit;
-  const TrunkAcross trunks = AcrossFromTrunks(front, back, o);
+  const TrunkAcross trunks = AcrossFromTrunks(FindTrunks(front, o), FindTrunks(back, o), o);
   if (best_fit.matched >= o.min_matched && best_fit.matched >= o.min_distinctness * std::max(chance, 1)) {
     along = best_fit.along, across = best_fit.across;
   } else {

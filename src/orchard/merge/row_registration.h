@@ -130,14 +130,16 @@ struct Trunk {
 // without sparse points (given poses) or canopy.
 std::vector<Trunk> FindTrunks(const SideCloud& side, const RowRegistrationOptions& options);
 
-// The distance between the two camera paths the trunks give: the median of
-// each side's trunks' distances, added (the sides face each other across
-// the trunks). NaN when a side shows fewer than options.min_trunks.
+// The distance between the two camera paths the sides' trunks (FindTrunks)
+// give: the median of each side's trunks' distances, added (the sides face
+// each other across the trunks). NaN when a side shows fewer than
+// options.min_trunks.
 struct TrunkAcross {
   int front = 0, back = 0;  // trunks found
   double across = std::nan("");
 };
-TrunkAcross AcrossFromTrunks(const SideCloud& front, const SideCloud& back, const RowRegistrationOptions& options);
+TrunkAcross AcrossFromTrunks(const std::vector<Trunk>& front, const std::vector<Trunk>& back,
+                             const RowRegistrationOptions& options);
 
 // A tree of the row, from the trunks: where it stands along the row (front
 // row frame, m) and which sides show its trunk.

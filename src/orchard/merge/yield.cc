@@ -266,6 +266,7 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
     }
   }
   std::string method;
+  bool fruit_registered = false;  // by RegisterSides (not the given poses nor the row)
   Json given_check;
   // What the registration matches: the kept clusters and, unless turned off,
   // the fallen ones (the apples lying under the row both sides see). Made
@@ -308,17 +309,7 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
       if (y.registration.back_scale != 1)
         spdlog::info("back side rescaled by {:.3f} to fit the front's fruit", y.registration.back_scale);
       back_cloud = std::move(scaled_back);
-      // The trunks' distance across, as a check on the fruit's (reported).
-      const TrunkAcross trunks = AcrossFromTrunks(front_cloud, back_cloud, row_options);
-      y.registration.across_trunks = trunks.across;
-      y.registration.trunks_front = trunks.front, y.registration.trunks_back = trunks.back;
-      if (std::abs(trunks.across - y.registration.across) > row_options.max_trunk_disagreement) {
-        const std::string w = "the fruit clusters put the camera paths " + std::to_string(y.registration.across) +
-                              " m apart, the trunks " + std::to_string(trunks.across) +
-                              " m: one of them is wrong (chance fruit matches, or posts taken for trunks)";
-        spdlog::warn("{}", w);
-        merge_warnings.push_back(w);
-      }
+      fruit_registered = true;
     } catch (const Error& fruit_error) {
       if (!o.row_registration || front_cloud.sparse.empty() || back_cloud.sparse.empty()) {
         // Given poses carry no sparse points for the row registration.
@@ -361,6 +352,23 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
                      {"along_m", y.registration.along - g.along},
                      {"across_m", y.registration.across - g.across},
                      {"note", "solved minus the transform implied by the given poses (meaningful when they share a frame)"}};
+    }
+  }
+  // Each side's trunks, found once with the sides as registered (the back
+  // rescaled): a check on the fruit registration's distance across, and the
+  // trees of the per-tree counts.
+  const std::vector<Trunk> front_trunks = FindTrunks(front_cloud, row_options);
+  std::vector<Trunk> back_trunks = FindTrunks(back_cloud, row_options);
+  if (fruit_registered) {
+    const TrunkAcross trunks = AcrossFromTrunks(front_trunks, back_trunks, row_options);
+    y.registration.across_trunks = trunks.across;
+    y.registration.trunks_front = trunks.front, y.registration.trunks_back = trunks.back;
+    if (std::abs(trunks.across - y.registration.across) > row_options.max_trunk_disagreement) {
+      const std::string w = "the fruit clusters put the camera paths " + std::to_string(y.registration.across) +
+                            " m apart, the trunks " + std::to_string(trunks.across) +
+                            " m: one of them is wrong (chance fruit matches, or posts taken for trunks)";
+      spdlog::warn("{}", w);
+      merge_warnings.push_back(w);
     }
   }
   timings["registration"] = stopwatch.Lap();
@@ -435,11 +443,9 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
   Json per_tree = Json::array();
   double per_tree_outside = 0;
   {
-    std::vector<Trunk> back_trunks = FindTrunks(back_cloud, row_options);
     for (auto& t : back_trunks)
       t.along = (y.registration.back_to_front * Eigen::Vector3d(t.along, t.across, 0)).x();
-    const std::vector<RowTree> trees =
-        TreesFromTrunks(FindTrunks(front_cloud, row_options), back_trunks, 0.5 * row_options.min_trunk_spacing);
+    const std::vector<RowTree> trees = TreesFromTrunks(front_trunks, back_trunks, 0.5 * row_options.min_trunk_spacing);
     std::vector<double> sum(trees.size(), 0);
     for (const auto& m : map) {
       const int k = TreeAt(trees, m.along, 0.5 * o.bin_length);
