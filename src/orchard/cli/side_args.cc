@@ -39,6 +39,9 @@ void AddSideOptions(CLI::App* cmd, SideOptions* options) {
   cmd->add_flag("!--no-ground-refit", o.refit_ground_below_fruit,
                 "Keep a fitted ground plane that too many fruit points lie below (default: refit it below the fruit)");
   cmd->add_flag("--rescale-poses", o.rescale_given_poses, "Scale given poses by the camera height too");
+  cmd->add_flag("!--no-triangulate-poses", o.triangulate_given_poses,
+                "Leave given poses without 3D points as they are (default: COLMAP triangulates points for them, "
+                "for the ground fit and the trunks)");
   cmd->add_flag("!--no-thin-frames", o.thin_dense_frames,
                 "Use all frames even when they are much denser than the 3D stage is tuned to (default: every k-th)");
   cmd->add_option("--link-distance", o.clusters.link_distance, "Fruit points closer than this (m) form a cluster")

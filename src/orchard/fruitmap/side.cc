@@ -685,6 +685,37 @@ MetricPoses MakeMetric(const ColmapModel& model, const SideInputs& in, const Sid
   return m;
 }
 
+// Given poses usually carry no points (GNSS/IMU, the generator's): COLMAP
+// triangulates them with the poses held (TriangulateColmapPoints), for the
+// ground fit, the reconstruction check and the row's trunks. Cached in
+// out/sparse with the given model's text as the key (given.txt; frames.txt
+// marks the mapper's own models). Without colmap, or with
+// o.triangulate_given_poses off, the model stays as given and out/sparse is
+// removed, so that no earlier run's points pass for these poses'.
+ColmapModel WithSparsePoints(ColmapModel model, const fs::path& image_dir, const SideInputs& in, const SideOptions& o) {
+  const fs::path sparse = in.out / "sparse";
+  if (!model.points3D.empty() || !o.triangulate_given_poses) {
+    fs::remove_all(sparse);
+    return model;
+  }
+  if (!ColmapAvailable(o.colmap.colmap)) {
+    spdlog::warn("the given poses carry no 3D points and colmap cannot be run to triangulate them: no trunks, "
+                 "and the ground plane must be given");
+    fs::remove_all(sparse);
+    return model;
+  }
+  const std::string key = ColmapCamerasText(model.cameras) + ColmapImagesText(model.images);
+  if (fs::exists(sparse / "given.txt") && ReadTextFile(sparse / "given.txt") == key) {
+    spdlog::info("reusing the points triangulated for the given poses in {}", sparse.string());
+    return ReadColmapTextModel(sparse);  // the given poses, written with 17 digits
+  }
+  fs::remove_all(sparse);
+  ColmapModel triangulated = TriangulateColmapPoints(image_dir, model, in.out / "colmap", o.colmap);
+  WriteColmapTextModel(triangulated, sparse);
+  WriteTextFileAtomic(sparse / "given.txt", key);
+  return triangulated;
+}
+
 // COLMAP on the selected frames: features and matches once, then the mapper
 // with seeds random_seed, random_seed + 1, ... while its model has warnings
 // or leaves too many frames out (BestAttempt). Each attempt is described in
@@ -831,6 +862,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   int num_frames = 0;
   bool rescale = o.rescale_given_poses;
   Json mapper_attempts;  // COLMAP's mapper runs (ReconstructSide); null with given poses
+  std::string sparse_from = "COLMAP's mapper";  // where the model's 3D points come from (side.json)
   if (!in.poses.empty()) {
     model = ReadColmapModel(in.poses);
     if (fs::is_directory(in.input)) {
@@ -856,6 +888,10 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
     for (const auto& [id, image] : model.images) posed.insert(image.name);
     for (const auto& n : names)
       if (!posed.count(n)) unregistered.push_back(n);
+    const bool came_with_points = !model.points3D.empty();
+    model = WithSparsePoints(std::move(model), image_dir, in, o);
+    sparse_from = came_with_points ? "given with the poses"
+                  : model.points3D.empty() ? "none" : "triangulated by COLMAP for the given poses";
   } else {
     rescale = true;
     image_dir = in.out / "frames";
@@ -873,6 +909,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
       model = ReadColmapTextModel(sparse);
     } else {
       model = ReconstructSide(image_dir, in, o, &mapper_attempts);
+      fs::remove_all(sparse);  // given.txt of a run on given poses would take this model for theirs
       WriteColmapTextModel(model, sparse);
       WriteTextFileAtomic(sparse / "mapper_attempts.json", mapper_attempts.dump(2) + "\n");
       WriteTextFileAtomic(sparse / "frames.txt", list.str());
@@ -1055,6 +1092,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
                   {"unregistered", unregistered}}},
       {"poses", in.poses.empty() ? "colmap" : in.poses.string()},
       {"mapper_attempts", mapper_attempts},
+      {"sparse_points", {{"count", model.points3D.size()}, {"from", sparse_from}}},
       {"detector", in.detector_name},
       {"counter", in.counter_name},
       {"best_views_by", BestViewsName(clusters.best_views_by)},

@@ -289,6 +289,11 @@ struct SideOptions {
   double camera_height = 1.5;
   // Given poses are taken as metric unless this is set.
   bool rescale_given_poses = false;
+  // Given poses without 3D points get COLMAP's points triangulated with the
+  // poses held (when colmap can be run): the ground fit needs them when no
+  // ground plane is given, and the row's trunks (per-tree counts, the
+  // distance across the row) always do.
+  bool triangulate_given_poses = true;
   // Annotated copies of every n-th frame (0 = none).
   int draw_every = 5;
   // Also count the side under these cluster rules, on the same fruit points

@@ -13,6 +13,7 @@
 #include "orchard/core/error.h"
 #include "orchard/core/file_io.h"
 #include "orchard/fruitmap/side.h"
+#include "orchard/sfm/colmap_model.h"
 #include "orchard/synth/synth.h"
 
 namespace orchard {
@@ -44,6 +45,14 @@ class SideTest : public ::testing::Test {
     in.out = *dir_ / out;
     return in;
   }
+  // The given poses as they are: COLMAP's triangulation of points for them
+  // (SideOptions::triangulate_given_poses) costs a test tens of seconds and
+  // has its own test below.
+  static SideOptions Options() {
+    SideOptions o;
+    o.triangulate_given_poses = false;
+    return o;
+  }
   static fs::path* dir_;
 };
 fs::path* SideTest::dir_ = nullptr;
@@ -51,7 +60,7 @@ fs::path* SideTest::dir_ = nullptr;
 TEST_F(SideTest, CountsTheVisibleApplesOnceFromTruePosesAndMasks) {
   const auto truth = nlohmann::json::parse(ReadTextFile(*dir_ / "synth/truth.json"));
   const int visible = truth.at("visible_front").get<int>();
-  SideOptions o;
+  SideOptions o = Options();
   const SideSummary s = RunSide(Inputs("out"), o);
   // Loose: the two-tree row has 21 frames (the docs measure the default 4-tree row).
   EXPECT_GT(visible, 20);
@@ -127,7 +136,7 @@ TEST_F(SideTest, CountsTheVisibleApplesOnceFromTruePosesAndMasks) {
 TEST_F(SideTest, WarnsWhenApplesShowTheScaleIsWrong) {
   // The true poses rescaled to a camera height of 0.5 m instead of 1.5: the
   // row shrinks to a third, and so do the apples.
-  SideOptions o;
+  SideOptions o = Options();
   o.rescale_given_poses = true;
   o.camera_height = 0.5;
   const SideSummary s = RunSide(Inputs("small_scale"), o);
@@ -138,7 +147,7 @@ TEST_F(SideTest, WarnsWhenApplesShowTheScaleIsWrong) {
 }
 
 TEST_F(SideTest, StepThinsGivenPosesAndSparseFramesAreWarnedAbout) {
-  SideOptions o;
+  SideOptions o = Options();
   o.frames.step = 2;  // every other frame: 25 cm apart, twice the tuned spacing
   const SideSummary s = RunSide(Inputs("step2"), o);
   const auto side = nlohmann::json::parse(ReadTextFile(*dir_ / "step2/side.json"));
@@ -171,6 +180,7 @@ TEST(SideDenseFramesTest, FramesTwiceTooDenseAreThinnedToEveryOther) {
   in.out = dir / "out";
   SideOptions o;
   o.draw_every = 0;
+  o.triangulate_given_poses = false;  // as in SideTest::Options
   const SideSummary s = RunSide(in, o);
   const auto side = nlohmann::json::parse(ReadTextFile(dir / "out/side.json"));
   const int input = side.at("frames").at("input").get<int>();
@@ -197,7 +207,8 @@ TEST_F(SideTest, CommandCountsDetectorBlobsWithTheCnnByDefault) {
   if (!bin || !fs::exists(bin)) GTEST_SKIP() << "ORCHARD_BIN not built";
   const fs::path row = *dir_ / "synth/front";
   const std::string common = " --in '" + (row / "images").string() + "' --poses '" + (row / "sparse").string() +
-                             "' --ground-plane '" + (row / "scene.json").string() + "' --draw-every 0";
+                             "' --ground-plane '" + (row / "scene.json").string() +
+                             "' --draw-every 0 --no-triangulate-poses";
   for (const auto& [detector, counter] : {std::pair<std::string, std::string>{"masks", "blob"}, {"gmm", "cnn:"}}) {
     const fs::path out = *dir_ / ("cli_" + detector);
     std::string args = common + " --detector " + detector + " --out '" + out.string() + "'";
@@ -209,7 +220,7 @@ TEST_F(SideTest, CommandCountsDetectorBlobsWithTheCnnByDefault) {
 }
 
 TEST_F(SideTest, FailsClearly) {
-  SideOptions o;
+  SideOptions o = Options();
   SideInputs in = Inputs("bad");
   in.masks = *dir_ / "nowhere";
   EXPECT_THROW(RunSide(in, o), Error);
@@ -221,16 +232,68 @@ TEST_F(SideTest, FailsClearly) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("cameras.txt"), std::string::npos) << e.what();
   }
-  // True poses carry no 3D points: without a given ground plane it must say so.
+  // True poses carry no 3D points: without a given ground plane it must say
+  // so, whether no points are to be triangulated or colmap cannot be run.
   in = Inputs("bad");
   in.ground.reset();
-  try {
-    RunSide(in, o);
-    ADD_FAILURE() << "no error";
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("ground plane"), std::string::npos) << e.what();
+  for (const bool triangulate : {false, true}) {
+    o.triangulate_given_poses = triangulate;
+    o.colmap.colmap = "/nonexistent/colmap";
+    try {
+      RunSide(in, o);
+      ADD_FAILURE() << "no error";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("ground plane"), std::string::npos) << e.what();
+    }
   }
   EXPECT_FALSE(fs::exists(*dir_ / "bad/side.json"));
+}
+
+// Given poses without points (GNSS/IMU, the generator's true poses): COLMAP
+// triangulates points with the poses held, the ground plane is fitted to them
+// as to the mapper's, and a rerun reuses them.
+TEST_F(SideTest, TriangulatesPointsForGivenPosesAndFitsTheGround) {
+  SideInputs in = Inputs("triangulated");
+  in.ground.reset();
+  SideOptions o;  // triangulate_given_poses
+  o.draw_every = 0;
+  const SideSummary s = RunSide(in, o);
+  const auto side = nlohmann::json::parse(ReadTextFile(*dir_ / "triangulated/side.json"));
+  EXPECT_EQ(side.at("ground_plane").at("source").get<std::string>().rfind("fitted to ", 0), 0u);
+  // The generator's ground is z = 0: the fit within 3 cm and half a degree.
+  const auto normal = side.at("ground_plane").at("normal").get<std::vector<double>>();
+  EXPECT_GT(std::abs(normal.at(2)), std::cos(0.5 * M_PI / 180));
+  EXPECT_LT(std::abs(side.at("ground_plane").at("d").get<double>()), 0.03);
+  // The true poses and COLMAP's keypoints agree to well under a pixel.
+  const double reprojection = side.at("reconstruction").at("reprojection_error_px").get<double>();
+  EXPECT_GT(reprojection, 0);
+  EXPECT_LT(reprojection, 1.0);
+  EXPECT_EQ(side.at("scale").get<double>(), 1.0);
+  // The poses are the given ones, under the given ids.
+  const ColmapModel given = ReadColmapTextModel(*dir_ / "synth/front/sparse");
+  const ColmapModel sparse = ReadColmapTextModel(*dir_ / "triangulated/sparse");
+  ASSERT_EQ(sparse.images.size(), given.images.size());
+  for (const auto& [id, image] : given.images) {
+    EXPECT_EQ(sparse.images.at(id).name, image.name);
+    EXPECT_LT((sparse.images.at(id).ProjectionCenter() - image.ProjectionCenter()).norm(), 1e-9) << image.name;
+  }
+  EXPECT_GT(sparse.points3D.size(), 500u);
+  EXPECT_EQ(side.at("sparse_points").at("count").get<size_t>(), sparse.points3D.size());
+  EXPECT_EQ(side.at("sparse_points").at("from").get<std::string>(), "triangulated by COLMAP for the given poses");
+  for (const auto& [pid, point] : sparse.points3D)
+    for (const auto& el : point.track) ASSERT_TRUE(given.images.count(el.image_id)) << el.image_id;
+  // Counted as with the true ground plane.
+  SideOptions plain = Options();
+  plain.draw_every = 0;
+  EXPECT_NEAR(s.count, RunSide(Inputs("triangulated_plain"), plain).count, 2);
+  // A rerun reuses the points; poses run without triangulation leave no points behind.
+  const auto written = fs::last_write_time(*dir_ / "triangulated/sparse/points3D.txt");
+  EXPECT_EQ(RunSide(in, o).count, s.count);
+  EXPECT_EQ(fs::last_write_time(*dir_ / "triangulated/sparse/points3D.txt"), written);
+  in.ground = ParseGroundPlane((*dir_ / "synth/front/scene.json").string());
+  RunSide(in, plain);
+  EXPECT_FALSE(fs::exists(*dir_ / "triangulated/sparse"));
+  EXPECT_EQ(nlohmann::json::parse(ReadTextFile(*dir_ / "triangulated/side.json")).at("sparse_points").at("from"), "none");
 }
 
 // A ground refit may mend a plane tilted about the path (0.54x and 0.98x on

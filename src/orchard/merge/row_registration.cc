@@ -355,7 +355,7 @@ Registration RegisterSidesOnRow(const SideCloud& front, const SideCloud& back, c
     if (static_cast<int>(c->size()) < o.min_canopy_points)
       Fail("the ", c == &canopy_f ? "front" : "back", " side has ", c->size(),
            " sparse canopy points, too few to register the sides on the row (need ", o.min_canopy_points,
-           "; given poses have none)");
+           "; given poses have them only when COLMAP triangulated points for them)");
 
   // Heading: the half turn, or the angle between the canopy lines (the
   // back's, turned by the half turn plus the heading, runs along the front's).

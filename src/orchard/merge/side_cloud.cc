@@ -136,7 +136,8 @@ SideCloud LoadSideCloud(const fs::path& dir, const std::string& name, const std:
     if (header) Fail(name, " side: ", ply_path.string(), " has no PLY header");
   }
   // Sparse points (COLMAP text: "id x y z r g b error track..."); the side
-  // writes sparse/ only for the poses it solved itself.
+  // writes sparse/ for the poses it solved and for given poses it
+  // triangulated points for (WithSparsePoints), never for given poses alone.
   const fs::path points_path = dir / "sparse" / "points3D.txt";
   if (fs::is_regular_file(points_path)) {
     std::ifstream in(points_path);

@@ -37,7 +37,8 @@ struct SideCloud {
   std::vector<SideCluster> fallen;
   int count = 0;                      // the side's count (sum over kept clusters)
   // COLMAP's sparse points (sparse/points3D.txt, scaled like the poses):
-  // leaves, branches, trunks and ground of the row. Empty with given poses.
+  // leaves, branches, trunks and ground of the row; for given poses the
+  // points COLMAP triangulated with them held (empty when it did not).
   std::vector<Eigen::Vector3d> sparse;
   std::vector<Eigen::Vector3d> cameras;  // camera centres (sparse/images.txt), with the sparse points
   double row_distance = 0;  // side.json: the filmed row's fruit distance from the camera path (m)

@@ -312,7 +312,8 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
       fruit_registered = true;
     } catch (const Error& fruit_error) {
       if (!o.row_registration || front_cloud.sparse.empty() || back_cloud.sparse.empty()) {
-        // Given poses carry no sparse points for the row registration.
+        // Given poses have sparse points only when COLMAP triangulated them
+        // (SideOptions::triangulate_given_poses, colmap installed).
         if (!both_given) fail_naming_broken_sides(fruit_error);
         fail_naming_broken_sides(Error(std::string(fruit_error.what()) +
                                        " (if the given poses of both sides share one frame, say so with "

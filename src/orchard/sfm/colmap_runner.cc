@@ -4,12 +4,14 @@
 #include <cstdlib>
 #include <optional>
 #include <set>
+#include <sstream>
 
 #include <spdlog/spdlog.h>
 
 #include "orchard/core/cpu.h"
 #include "orchard/core/error.h"
 #include "orchard/core/file_io.h"
+#include "orchard/sfm/colmap_binary.h"
 
 namespace orchard {
 namespace {
@@ -46,11 +48,12 @@ bool ColmapAvailable(const std::string& colmap) {
   return std::system((Quote(colmap) + " help > /dev/null 2>&1").c_str()) == 0;
 }
 
-void MatchColmapFeatures(const fs::path& image_dir, const fs::path& workspace, const ColmapRunnerOptions& options) {
+void MatchColmapFeatures(const fs::path& image_dir, const fs::path& workspace, const ColmapRunnerOptions& options,
+                         const std::vector<std::string>& only, const ColmapCamera* known_camera) {
   options.Check();
-  const std::vector<fs::path> images = ListImages(image_dir);
-  if (static_cast<int>(images.size()) < options.min_registered)
-    Fail("only ", images.size(), " frames in ", image_dir.string(), ", structure from motion needs at least ",
+  const size_t num_images = only.empty() ? ListImages(image_dir).size() : only.size();
+  if (static_cast<int>(num_images) < options.min_registered)
+    Fail("only ", num_images, " frames in ", image_dir.string(), ", structure from motion needs at least ",
          options.min_registered, " (too few frames)");
   if (!ColmapAvailable(options.colmap))
     Fail("the colmap program '", options.colmap, "' cannot be run (install colmap, or give poses with --poses)");
@@ -61,9 +64,22 @@ void MatchColmapFeatures(const fs::path& image_dir, const fs::path& workspace, c
   const std::string db = Quote((workspace / "database.db").string());
   const std::string exe = Quote(options.colmap);
   const std::string threads = std::to_string(ThreadsOrAvailableCores(options.num_threads));
+  std::string reader = " --ImageReader.camera_model " + options.camera_model;
+  if (known_camera) {
+    std::ostringstream params;
+    params.precision(17);
+    for (size_t i = 0; i < known_camera->params.size(); ++i) params << (i ? "," : "") << known_camera->params[i];
+    reader = " --ImageReader.camera_model " + known_camera->model + " --ImageReader.camera_params " +
+             Quote(params.str());
+  }
+  if (!only.empty()) {
+    std::string list;
+    for (const auto& name : only) list += name + "\n";
+    WriteTextFileAtomic(workspace / "image_list.txt", list);
+    reader += " --image_list_path " + Quote((workspace / "image_list.txt").string());
+  }
   RunStep("feature_extractor",
-          exe + " feature_extractor --database_path " + db + " --image_path " + Quote(image_dir.string()) +
-              " --ImageReader.camera_model " + options.camera_model +
+          exe + " feature_extractor --database_path " + db + " --image_path " + Quote(image_dir.string()) + reader +
               " --ImageReader.single_camera 1 --SiftExtraction.use_gpu 0 --SiftExtraction.max_num_features " +
               std::to_string(options.max_num_features) +
               " --SiftExtraction.first_octave " + std::to_string(options.first_octave) +
@@ -74,6 +90,69 @@ void MatchColmapFeatures(const fs::path& image_dir, const fs::path& workspace, c
               " --SiftMatching.use_gpu 0 --SequentialMatching.overlap " + std::to_string(options.overlap) +
               " --SiftMatching.num_threads " + threads,
           log);
+}
+
+ColmapModel TriangulateColmapPoints(const fs::path& image_dir, const ColmapModel& posed, const fs::path& workspace,
+                                    const ColmapRunnerOptions& options) {
+  if (posed.cameras.size() != 1)
+    Fail("triangulating points for given poses needs one camera; the pose model has ", posed.cameras.size());
+  const ColmapCamera& camera = posed.cameras.begin()->second;
+  std::vector<std::string> names;
+  for (const auto& [id, image] : posed.images) names.push_back(image.name);
+  std::sort(names.begin(), names.end());
+  MatchColmapFeatures(image_dir, workspace, options, names, &camera);
+  // The given poses without points: COLMAP matches frames to the database by
+  // name (--clear_points 1 takes the database's image ids and keypoints); a
+  // fresh database with one camera gives it id 1.
+  ColmapModel input;
+  ColmapCamera one = camera;
+  one.camera_id = 1;
+  input.cameras[1] = one;
+  for (const auto& [id, image] : posed.images) {
+    ColmapImage i = image;
+    i.camera_id = 1;
+    i.points2D.clear();
+    input.images[id] = std::move(i);
+  }
+  WriteColmapTextModel(input, workspace / "posed");
+  const fs::path log = workspace / "colmap.log";
+  const std::string exe = Quote(options.colmap);
+  fs::create_directories(workspace / "triangulated");
+  RunStep("point_triangulator",
+          exe + " point_triangulator --database_path " + Quote((workspace / "database.db").string()) +
+              " --image_path " + Quote(image_dir.string()) + " --input_path " +
+              Quote((workspace / "posed").string()) + " --output_path " +
+              Quote((workspace / "triangulated").string()) +
+              " --clear_points 1 --Mapper.ba_refine_focal_length 0 --Mapper.ba_refine_principal_point 0"
+              " --Mapper.ba_refine_extra_params 0 --Mapper.num_threads " +
+              std::to_string(ThreadsOrAvailableCores(options.num_threads)),
+          log);
+  const ColmapModel triangulated = ReadColmapModel(workspace / "triangulated");
+  // Back to the given ids, poses and camera; the keypoints and tracks are COLMAP's.
+  std::map<std::string, int> given_id;
+  for (const auto& [id, image] : posed.images) given_id[image.name] = id;
+  std::map<int, int> to_given;
+  ColmapModel out;
+  out.cameras = posed.cameras;
+  out.images = posed.images;
+  for (auto& [id, image] : out.images) image.points2D.clear();
+  double moved = 0;
+  for (const auto& [id, image] : triangulated.images) {
+    const auto it = given_id.find(image.name);
+    if (it == given_id.end()) Fail("COLMAP's point_triangulator returned frame ", image.name, ", which has no given pose");
+    to_given[id] = it->second;
+    ColmapImage& given = out.images.at(it->second);
+    given.points2D = image.points2D;
+    moved = std::max(moved, (image.ProjectionCenter() - given.ProjectionCenter()).norm());
+  }
+  // The poses are held; a camera that moved means the model does not match.
+  if (moved > 1e-6 * (1 + posed.images.begin()->second.ProjectionCenter().norm()))
+    spdlog::warn("COLMAP's point_triangulator moved a given camera by {:.3g} (its points are kept)", moved);
+  out.points3D = triangulated.points3D;
+  for (auto& [pid, point] : out.points3D)
+    for (auto& el : point.track) el.image_id = to_given.at(el.image_id);
+  spdlog::info("COLMAP triangulated {} points for the {} given poses", out.points3D.size(), out.images.size());
+  return out;
 }
 
 ColmapRunResult RunColmap(const fs::path& image_dir, const fs::path& workspace, const ColmapRunnerOptions& options) {

@@ -66,12 +66,26 @@ struct ColmapRunResult {
 // registered.
 ColmapRunResult RunColmap(const fs::path& image_dir, const fs::path& workspace, const ColmapRunnerOptions& options);
 
-// Feature extraction and sequential matching into a fresh `workspace`.
-void MatchColmapFeatures(const fs::path& image_dir, const fs::path& workspace, const ColmapRunnerOptions& options);
+// Feature extraction and sequential matching into a fresh `workspace`: all
+// images of `image_dir`, or only those named in `only` (when not empty).
+// With `known_camera` COLMAP takes its model and parameters instead of
+// guessing them from the image size.
+void MatchColmapFeatures(const fs::path& image_dir, const fs::path& workspace, const ColmapRunnerOptions& options,
+                         const std::vector<std::string>& only = {}, const ColmapCamera* known_camera = nullptr);
 
 // The mapper alone, on the matches MatchColmapFeatures left in `workspace`
 // (its earlier models are replaced), with options.random_seed.
 ColmapRunResult MapColmap(const fs::path& image_dir, const fs::path& workspace, const ColmapRunnerOptions& options);
+
+// Sparse points for poses COLMAP did not solve (GNSS/IMU, another SLAM, the
+// generator's true poses), which carry none: features and matches of the
+// posed frames as for the mapper, then COLMAP's point_triangulator with the
+// poses and the camera held. Returns `posed` (its ids, poses and camera) with
+// the triangulated points3D and each frame's keypoints as points2D. `posed`
+// must have one camera. Throws orchard::Error when colmap is missing or fails
+// or when fewer than min_registered frames are posed.
+ColmapModel TriangulateColmapPoints(const fs::path& image_dir, const ColmapModel& posed, const fs::path& workspace,
+                                    const ColmapRunnerOptions& options);
 
 // Runs `attempt(k)` for k = 0, 1, ... until one reports no problems or
 // `max_attempts` have run, and returns the best k: the fewest problems,

@@ -69,6 +69,52 @@ TEST(ColmapRunner, PassesItsThreadCountToEveryStep) {
   fs::remove_all(dir);
 }
 
+// Points for given poses: only the posed frames' features, with the given
+// camera, and the triangulator holding poses and camera (the real program
+// runs in fruitmap's SideTest.TriangulatesPointsForGivenPosesAndFitsTheGround).
+TEST(ColmapRunner, TriangulationHoldsTheGivenPosesAndCamera) {
+  const fs::path dir = TempDir("triangulate");
+  for (int i = 0; i < 6; ++i)
+    cv::imwrite((dir / ("f" + std::to_string(i) + ".png")).string(), cv::Mat3b(32, 32, cv::Vec3b(i, i, i)));
+  const fs::path fake = dir / "colmap.sh", args = dir / "args.txt";
+  WriteTextFileAtomic(fake, "#!/bin/sh\necho \"$@\" >> '" + args.string() +
+                                "'\nfor a in \"$@\"; do case $a in *database.db) touch \"$a\";; esac; done\n");
+  fs::permissions(fake, fs::perms::owner_all);
+  ColmapRunnerOptions o;
+  o.colmap = fake.string();
+  o.num_threads = 1;
+  ColmapModel posed;
+  posed.cameras[3] = ColmapCamera{3, "PINHOLE", 32, 32, {40, 41, 16, 16}};
+  for (int i = 1; i <= 5; ++i) {  // f5.png has no pose
+    ColmapImage image;
+    image.image_id = 10 + i, image.camera_id = 3, image.name = "f" + std::to_string(i - 1) + ".png";
+    image.tvec = Eigen::Vector3d(-0.1 * i, 0, 0);
+    posed.images[image.image_id] = image;
+  }
+  EXPECT_THROW(TriangulateColmapPoints(dir, posed, dir / "ws", o), Error);  // the stand-in writes no model
+  const std::string a = ReadTextFile(args);
+  EXPECT_NE(a.find("--ImageReader.camera_model PINHOLE --ImageReader.camera_params 40,41,16,16"), std::string::npos)
+      << a;
+  EXPECT_EQ(ReadTextFile(dir / "ws/image_list.txt"), "f0.png\nf1.png\nf2.png\nf3.png\nf4.png\n");
+  EXPECT_NE(a.find("point_triangulator"), std::string::npos);
+  for (const char* held : {"--clear_points 1", "--Mapper.ba_refine_focal_length 0",
+                           "--Mapper.ba_refine_principal_point 0", "--Mapper.ba_refine_extra_params 0"})
+    EXPECT_NE(a.find(held), std::string::npos) << held;
+  // The triangulator's input: the given poses under camera 1, the fresh
+  // database's only camera, and no points.
+  const ColmapModel input = ReadColmapTextModel(dir / "ws/posed");
+  ASSERT_EQ(input.cameras.size(), 1u);
+  EXPECT_EQ(input.cameras.begin()->first, 1);
+  EXPECT_EQ(input.images.size(), 5u);
+  EXPECT_EQ(input.images.at(12).camera_id, 1);
+  EXPECT_EQ(input.images.at(12).tvec, posed.images.at(12).tvec);
+  EXPECT_TRUE(input.points3D.empty());
+  posed.cameras[4] = posed.cameras[3];
+  EXPECT_NE(Message([&] { TriangulateColmapPoints(dir, posed, dir / "ws", o); }).find("one camera"),
+            std::string::npos);
+  fs::remove_all(dir);
+}
+
 TEST(ColmapRunner, BestAttemptStopsAtTheFirstWithoutProblems) {
   // Problems per attempt; -1 throws.
   const auto run = [](std::vector<int> problems, int max_attempts, std::vector<int>* ran) {
