@@ -37,20 +37,26 @@ TEST(ColmapRunner, TooFewFramesAndMissingProgram) {
   fs::remove_all(dir);
 }
 
-// COLMAP's own default thread count is every CPU of the machine; the runner
-// passes the count it is given, or the cores this process may use.
-TEST(ColmapRunner, PassesItsThreadCountToEveryStep) {
-  const fs::path dir = TempDir("threads");
-  for (int i = 0; i < 5; ++i)
+// `frames` small frames f0.png, f1.png, ... in `dir` and a stand-in for the
+// colmap program that records its arguments in dir/args.txt and makes the
+// database the mapper looks for; returns options that run it.
+ColmapRunnerOptions FakeColmap(const fs::path& dir, int frames) {
+  for (int i = 0; i < frames; ++i)
     cv::imwrite((dir / ("f" + std::to_string(i) + ".png")).string(), cv::Mat3b(32, 32, cv::Vec3b(i, i, i)));
-  // A stand-in for the colmap program that records its arguments and makes
-  // the database the mapper looks for.
-  const fs::path fake = dir / "colmap.sh", args = dir / "args.txt";
-  WriteTextFileAtomic(fake, "#!/bin/sh\necho \"$@\" >> '" + args.string() +
+  const fs::path fake = dir / "colmap.sh";
+  WriteTextFileAtomic(fake, "#!/bin/sh\necho \"$@\" >> '" + (dir / "args.txt").string() +
                                 "'\nfor a in \"$@\"; do case $a in *database.db) touch \"$a\";; esac; done\n");
   fs::permissions(fake, fs::perms::owner_all);
   ColmapRunnerOptions o;
   o.colmap = fake.string();
+  return o;
+}
+
+// COLMAP's own default thread count is every CPU of the machine; the runner
+// passes the count it is given, or the cores this process may use.
+TEST(ColmapRunner, PassesItsThreadCountToEveryStep) {
+  const fs::path dir = TempDir("threads"), args = dir / "args.txt";
+  ColmapRunnerOptions o = FakeColmap(dir, 5);
   o.num_threads = 3;
   MatchColmapFeatures(dir, dir / "ws", o);
   EXPECT_THROW(MapColmap(dir, dir / "ws", o), Error);  // the stand-in writes no model
@@ -73,15 +79,8 @@ TEST(ColmapRunner, PassesItsThreadCountToEveryStep) {
 // camera, and the triangulator holding poses and camera (the real program
 // runs in fruitmap's SideTest.TriangulatesPointsForGivenPosesAndFitsTheGround).
 TEST(ColmapRunner, TriangulationHoldsTheGivenPosesAndCamera) {
-  const fs::path dir = TempDir("triangulate");
-  for (int i = 0; i < 6; ++i)
-    cv::imwrite((dir / ("f" + std::to_string(i) + ".png")).string(), cv::Mat3b(32, 32, cv::Vec3b(i, i, i)));
-  const fs::path fake = dir / "colmap.sh", args = dir / "args.txt";
-  WriteTextFileAtomic(fake, "#!/bin/sh\necho \"$@\" >> '" + args.string() +
-                                "'\nfor a in \"$@\"; do case $a in *database.db) touch \"$a\";; esac; done\n");
-  fs::permissions(fake, fs::perms::owner_all);
-  ColmapRunnerOptions o;
-  o.colmap = fake.string();
+  const fs::path dir = TempDir("triangulate"), args = dir / "args.txt";
+  ColmapRunnerOptions o = FakeColmap(dir, 6);
   o.num_threads = 1;
   ColmapModel posed;
   posed.cameras[3] = ColmapCamera{3, "PINHOLE", 32, 32, {40, 41, 16, 16}};
