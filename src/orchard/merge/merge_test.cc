@@ -588,6 +588,24 @@ TEST(RowRegistrationTest, LevelsASideOnTheGroundOfItsSparsePoints) {
   EXPECT_NEAR(l.scale, 0.5, 0.01);
   for (size_t i = 0; i < front.clusters.size(); ++i)
     EXPECT_LT((wrong.clusters[i].centre - front.clusters[i].centre).norm(), 0.02) << i;
+  // Metric given poses whose own ground fit took a plane 10 cm up and tilted
+  // 2 degrees across the row: levelled onto the true ground, lengths kept.
+  SideCloud tilted = front;
+  const Eigen::AngleAxisd tilt(2 * M_PI / 180, Eigen::Vector3d::UnitX());
+  const auto onto_tilted = [&](const Eigen::Vector3d& p) {
+    return Eigen::Vector3d(tilt * (p - Eigen::Vector3d(0, 0, 0.1)));
+  };
+  for (auto& p : tilted.sparse) p = onto_tilted(p);
+  for (auto& c : tilted.clusters) {
+    for (auto& p : c.points) p = onto_tilted(p);
+    UpdateClusterExtent(&c);
+  }
+  const Levelling kept = LevelOnSparseGround(&tilted, o, /*keep_scale=*/true);
+  EXPECT_TRUE(kept.changed);
+  EXPECT_EQ(kept.scale, 1.0);
+  EXPECT_NEAR(kept.tilt_deg, 2.0, 0.1);
+  for (size_t i = 0; i < front.clusters.size(); ++i)
+    EXPECT_LT((tilted.clusters[i].centre - front.clusters[i].centre).norm(), 0.02) << i;
   // Too few sparse points: no levelling, and no registration on the row.
   SideCloud bare = front;
   bare.sparse.resize(20);

@@ -277,7 +277,7 @@ int TreeAt(const std::vector<RowTree>& trees, double along, double lone_half_wid
   return std::abs(along - trees[k].along) <= half ? k : -1;
 }
 
-Levelling LevelOnSparseGround(SideCloud* side, const RowRegistrationOptions& o) {
+Levelling LevelOnSparseGround(SideCloud* side, const RowRegistrationOptions& o, bool keep_scale) {
   o.Check();
   Levelling l;
   const double h = o.camera_height;
@@ -320,7 +320,7 @@ Levelling LevelOnSparseGround(SideCloud* side, const RowRegistrationOptions& o) 
   const double camera_above = up.dot(Eigen::Vector3d(0, 0, h) - origin);
   if (!(camera_above > 0.1 * h))
     Fail(side->name, " side: the ground found in its sparse points lies at the cameras' height; cannot level it");
-  l.scale = h / camera_above;
+  l.scale = keep_scale ? 1.0 : h / camera_above;
   Eigen::Matrix3d rot;
   rot.row(0) = along.transpose(), rot.row(1) = across.transpose(), rot.row(2) = up.transpose();
   auto move = [&](const Eigen::Vector3d& p) { return Eigen::Vector3d(l.scale * (rot * (p - origin))); };

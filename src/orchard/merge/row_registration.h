@@ -173,8 +173,10 @@ struct Levelling {
 
 // Finds the ground in the side's sparse points and, when it is not the
 // side's z = 0 plane, moves the side (sparse and fruit points) onto it:
-// level, the cameras `camera_height` above it. No-op without sparse points.
-Levelling LevelOnSparseGround(SideCloud* side, const RowRegistrationOptions& options);
+// level, the cameras `camera_height` above it, or, with `keep_scale` (given
+// poses taken as metric), level and on it at the side's own scale. No-op
+// without sparse points.
+Levelling LevelOnSparseGround(SideCloud* side, const RowRegistrationOptions& options, bool keep_scale = false);
 
 // The canopy profiles' correlation along the row with the back placed by
 // `back_to_front`: a check on an alignment found from the fruit (few

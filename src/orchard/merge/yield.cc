@@ -246,9 +246,13 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
     // Ground planes level and coincident, scales alike: the side's own
     // ground fit can take the canopy's lower edge for the ground.
     for (SideCloud* cloud : {&front_cloud, &back_cloud}) {
+      // Given poses are metric unless rescaled by the camera height: their
+      // scale stays (their points are COLMAP's, triangulated for them).
+      const SideInputs& side_in = cloud == &front_cloud ? in.front : in.back;
+      const bool metric = !side_in.poses.empty() && !o.side.rescale_given_poses;
       Levelling l;
       try {
-        l = LevelOnSparseGround(cloud, row_options);
+        l = LevelOnSparseGround(cloud, row_options, metric);
       } catch (const Error& e) {
         fail_naming_broken_sides(e);
       }
@@ -258,7 +262,9 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
       if (l.changed) {
         const std::string w = cloud->name + ": its sparse points show the ground " + std::to_string(-l.ground_height) +
                               " m below its ground plane (tilt " + std::to_string(l.tilt_deg) +
-                              " deg): re-levelled and rescaled by " + std::to_string(l.scale) +
+                              " deg): re-levelled" +
+                              (metric ? std::string(" (given poses: scale kept)")
+                                      : " and rescaled by " + std::to_string(l.scale)) +
                               " for the merge (the side's own count used the old plane)";
         spdlog::warn("{}", w);
         merge_warnings.push_back(w);
