@@ -694,13 +694,13 @@ MetricPoses MakeMetric(const ColmapModel& model, const SideInputs& in, const Sid
 // removed, so that no earlier run's points pass for these poses'.
 ColmapModel WithSparsePoints(ColmapModel model, const fs::path& image_dir, const SideInputs& in, const SideOptions& o) {
   const fs::path sparse = in.out / "sparse";
-  if (!model.points3D.empty() || !o.triangulate_given_poses) {
-    fs::remove_all(sparse);
-    return model;
-  }
-  if (!ColmapAvailable(o.colmap.colmap)) {
+  bool triangulate = model.points3D.empty() && o.triangulate_given_poses;
+  if (triangulate && !ColmapAvailable(o.colmap.colmap)) {
     spdlog::warn("the given poses carry no 3D points and colmap cannot be run to triangulate them: no trunks, "
                  "and the ground plane must be given");
+    triangulate = false;
+  }
+  if (!triangulate) {
     fs::remove_all(sparse);
     return model;
   }

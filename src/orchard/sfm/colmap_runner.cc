@@ -129,8 +129,6 @@ ColmapModel TriangulateColmapPoints(const fs::path& image_dir, const ColmapModel
           log);
   const ColmapModel triangulated = ReadColmapModel(workspace / "triangulated");
   // Back to the given ids, poses and camera; the keypoints and tracks are COLMAP's.
-  std::map<std::string, int> given_id;
-  for (const auto& [id, image] : posed.images) given_id[image.name] = id;
   std::map<int, int> to_given;
   ColmapModel out;
   out.cameras = posed.cameras;
@@ -138,10 +136,10 @@ ColmapModel TriangulateColmapPoints(const fs::path& image_dir, const ColmapModel
   for (auto& [id, image] : out.images) image.points2D.clear();
   double moved = 0;
   for (const auto& [id, image] : triangulated.images) {
-    const auto it = given_id.find(image.name);
-    if (it == given_id.end()) Fail("COLMAP's point_triangulator returned frame ", image.name, ", which has no given pose");
-    to_given[id] = it->second;
-    ColmapImage& given = out.images.at(it->second);
+    const ColmapImage* posed_image = posed.FindImage(image.name);
+    if (!posed_image) Fail("COLMAP's point_triangulator returned frame ", image.name, ", which has no given pose");
+    to_given[id] = posed_image->image_id;
+    ColmapImage& given = out.images.at(posed_image->image_id);
     given.points2D = image.points2D;
     moved = std::max(moved, (image.ProjectionCenter() - given.ProjectionCenter()).norm());
   }
