@@ -33,6 +33,10 @@ void AddSideOptions(CLI::App* cmd, SideOptions* options) {
   cmd->add_option("--ground-below-penalty", o.ground.below_penalty,
                   "Ground fit: each sparse point well below a candidate plane costs this many inliers")
       ->capture_default_str();
+  cmd->add_option("--ground-fine-fraction", o.ground.fine_inlier_fraction,
+                  "Ground fit: inlier distance of the second fit within the first one's band, as a fraction of the "
+                  "median distance to the points (the ground's thin layer; 0: the first band only)")
+      ->capture_default_str();
   cmd->add_option("--ground-max-tilt", o.ground.max_tilt_deg,
                   "Ground fit: largest angle (degrees) between the plane's normal and the cameras' mean up")
       ->capture_default_str();

@@ -36,6 +36,8 @@ void GroundPlaneOptions::Check() const {
                        inlier_fraction);
   ORCHARD_CHECK_OPTION(max_tilt_deg > 0 && max_tilt_deg < 90, "ground max tilt must be in (0, 90) degrees, got ",
                        max_tilt_deg);
+  ORCHARD_CHECK_OPTION(fine_inlier_fraction >= 0 && fine_inlier_fraction <= inlier_fraction,
+                       "ground fine inlier fraction must be in [0, inlier fraction], got ", fine_inlier_fraction);
   ORCHARD_CHECK_OPTION(below_penalty >= 0, "ground below penalty must be >= 0, got ", below_penalty);
   ORCHARD_CHECK_OPTION(min_inliers >= 3, "ground min inliers must be at least 3, got ", min_inliers);
 }
@@ -54,20 +56,18 @@ Plane FitGroundPlane(const std::vector<Eigen::Vector3d>& points, const std::vect
     ranges.push_back((points[i] - camera_centres[camera_centres.size() / 2]).norm());
   const double tol = options.inlier_fraction * Quantile(ranges, 0.5);
   const double cos_tilt = std::cos(options.max_tilt_deg * M_PI / 180);
-  std::mt19937_64 rng(options.seed);
-  std::uniform_int_distribution<size_t> pick(0, points.size() - 1);
   auto admissible = [&](const Plane& p) {
     if (p.normal.dot(up) < cos_tilt) return false;
     for (const auto& c : camera_centres)
       if (p.SignedDistance(c) <= 0) return false;
     return true;
   };
-  auto count_inliers = [&](const Plane& p) {
+  auto count_inliers = [&](const Plane& p, double tol) {
     int n = 0;
     for (const auto& x : points) n += std::abs(p.SignedDistance(x)) < tol;
     return n;
   };
-  auto score = [&](const Plane& p) {
+  auto score = [&](const Plane& p, double tol) {
     int inliers = 0, below = 0;
     for (const auto& x : points) {
       const double d = p.SignedDistance(x);
@@ -78,38 +78,57 @@ Plane FitGroundPlane(const std::vector<Eigen::Vector3d>& points, const std::vect
       for (const auto& x : *above) above_below += p.SignedDistance(x) <= -tol;
     return inliers - options.below_penalty * below - above_penalty * above_below;
   };
+  // The best admissible plane through three of `samples`, scored on all points.
+  std::mt19937_64 rng(options.seed);
+  auto ransac = [&](const std::vector<Eigen::Vector3d>& samples, double tol, Plane* best) {
+    std::uniform_int_distribution<size_t> pick(0, samples.size() - 1);
+    double best_score = -1e300;
+    bool found = false;
+    for (int it = 0; it < options.iterations; ++it) {
+      const Eigen::Vector3d& a = samples[pick(rng)];
+      const Eigen::Vector3d& b = samples[pick(rng)];
+      const Eigen::Vector3d& c = samples[pick(rng)];
+      Eigen::Vector3d n = (b - a).cross(c - a);
+      if (n.norm() < 1e-12) continue;
+      Plane p;
+      p.normal = n.normalized();
+      if (p.normal.dot(up) < 0) p.normal = -p.normal;
+      p.d = -p.normal.dot(a);
+      if (!admissible(p)) continue;
+      const double sc = score(p, tol);
+      if (sc > best_score) best_score = sc, *best = p, found = true;
+    }
+    return found;
+  };
   Plane best;
-  int best_count = -1;
-  double best_score = -1e300;
-  for (int it = 0; it < options.iterations; ++it) {
-    const Eigen::Vector3d& a = points[pick(rng)];
-    const Eigen::Vector3d& b = points[pick(rng)];
-    const Eigen::Vector3d& c = points[pick(rng)];
-    Eigen::Vector3d n = (b - a).cross(c - a);
-    if (n.norm() < 1e-12) continue;
-    Plane p;
-    p.normal = n.normalized();
-    if (p.normal.dot(up) < 0) p.normal = -p.normal;
-    p.d = -p.normal.dot(a);
-    if (!admissible(p)) continue;
-    const double sc = score(p);
-    if (sc > best_score) best_score = sc, best = p, best_count = count_inliers(p);
-  }
+  const int best_count = ransac(points, tol, &best) ? count_inliers(best, tol) : 0;
   if (best_count < options.min_inliers)
     Fail("ground plane: no roughly horizontal plane below the cameras has ", options.min_inliers,
-         " supporting points (best: ", std::max(best_count, 0), " of ", points.size(), ")");
+         " supporting points (best: ", best_count, " of ", points.size(), ")");
+  // The thin layer of ground points within the wide band (options.fine_inlier_fraction).
+  double refine_tol = tol;
+  if (options.fine_inlier_fraction > 0) {
+    const double fine_tol = options.fine_inlier_fraction * tol / options.inlier_fraction;
+    std::vector<Eigen::Vector3d> band;
+    for (const auto& x : points)
+      if (std::abs(best.SignedDistance(x)) < tol) band.push_back(x);
+    Plane fine;
+    if (ransac(band, fine_tol, &fine) && count_inliers(fine, fine_tol) >= options.min_inliers)
+      best = fine, refine_tol = fine_tol;
+  }
   // Refine on the inliers (twice, as the inlier set settles).
+  int count = count_inliers(best, refine_tol);
   for (int round = 0; round < 2; ++round) {
     std::vector<Eigen::Vector3d> inliers;
     for (const auto& x : points)
-      if (std::abs(best.SignedDistance(x)) < tol) inliers.push_back(x);
+      if (std::abs(best.SignedDistance(x)) < refine_tol) inliers.push_back(x);
     if (inliers.size() < 3) break;
     const Plane refined = FitPlaneLeastSquares(inliers, up);
     if (!admissible(refined)) break;
     best = refined;
-    best_count = static_cast<int>(inliers.size());
+    count = static_cast<int>(inliers.size());
   }
-  if (num_inliers) *num_inliers = best_count;
+  if (num_inliers) *num_inliers = count;
   return best;
 }
 

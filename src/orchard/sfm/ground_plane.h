@@ -34,6 +34,16 @@ struct GroundPlaneOptions {
   // backs took a surface rising 19-20 degrees away with more points,
   // scaling them 0.69x (docs/side.md). Raise it for a camera pitched more.
   double max_tilt_deg = 15;
+  // A second RANSAC among the first one's inliers, with this tighter
+  // inlier distance (same scale as inlier_fraction; 0: none): the ground's
+  // points form a thin layer (about 1 cm thick at 3 m), and the wide band of
+  // the first fit also takes trunk bases, weeds, low leaves and fallen fruit
+  // above it, which tilted the least-squares plane. On 20 sides of true poses
+  // with triangulated points the plane under the row went from 13 mm mean /
+  // 30 mm largest above the truth (one side tilted 8 deg) to 3 / 7 mm; on 19
+  // COLMAP sides the scale from the camera height from 1.5% mean / 8.5%
+  // largest off to 0.6% / 1.5% (docs/side.md, forty-second session).
+  double fine_inlier_fraction = 0.005;
   // Fewest inliers for a ground plane.
   int min_inliers = 15;
   // A candidate's score is its inliers minus this many times the points

@@ -132,6 +132,36 @@ TEST(GroundPlane, FruitKnownToBeAboveCorrectsAPlaneThroughIt) {
               0.02);
 }
 
+TEST(GroundPlane, FindsTheThinGroundLayerUnderLowClutter) {
+  // As the frames of a camera 2.5 m off the row see it: level ground points
+  // (5 mm noise) densely under the row (y 0..0.75) and sparsely beyond it,
+  // and clutter 2-12 cm above the ground along the row's foot (trunk bases,
+  // weeds, fallen fruit), inside the wide first band. The least-squares
+  // plane of the wide band rises towards the clutter; the thin layer does not.
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(0, 1);
+  std::normal_distribution<double> noise(0, 0.005);
+  std::vector<Eigen::Vector3d> pts;
+  for (int i = 0; i < 400; ++i) pts.push_back({8 * u(rng), 0.75 * u(rng), noise(rng)});
+  for (int i = 0; i < 100; ++i) pts.push_back({8 * u(rng), 1 + 3 * u(rng), noise(rng)});
+  for (int i = 0; i < 250; ++i) pts.push_back({8 * u(rng), -0.2 + 0.5 * u(rng), 0.02 + 0.1 * u(rng)});
+  for (int i = 0; i < 300; ++i) pts.push_back({8 * u(rng), 0.6 * (u(rng) - 0.5), 0.6 + 2.4 * u(rng)});  // canopy
+  std::vector<Eigen::Vector3d> centres;
+  for (int i = 0; i < 17; ++i) centres.push_back({i * 0.5, -2.5, 1.5});
+  const Eigen::Vector3d up(0, 0, 1);
+  const Eigen::Vector3d under_camera(4, -2.5, 0), under_row(4, 0.3, 0);
+  GroundPlaneOptions o;
+  const Plane thin = FitGroundPlane(pts, centres, up, o);
+  EXPECT_GT(thin.normal.z(), std::cos(0.3 * M_PI / 180));
+  EXPECT_NEAR(thin.SignedDistance(under_row), 0, 0.005);
+  EXPECT_NEAR(thin.SignedDistance(under_camera), 0, 0.015);
+  o.fine_inlier_fraction = 0;  // the wide band's plane alone
+  const Plane wide = FitGroundPlane(pts, centres, up, o);
+  EXPECT_GT(std::abs(wide.SignedDistance(under_camera)), 0.03);
+  o.fine_inlier_fraction = 2 * o.inlier_fraction;
+  EXPECT_THROW(o.Check(), Error);
+}
+
 TEST(GroundPlane, FailsClearlyWithoutGroundPoints) {
   std::vector<CameraView> views = {CameraAt({0, -2.5, 1.5}), CameraAt({1, -2.5, 1.5})};
   std::vector<Eigen::Vector3d> centres = {views[0].Center(), views[1].Center()};
