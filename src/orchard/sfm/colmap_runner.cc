@@ -37,6 +37,8 @@ void ColmapRunnerOptions::Check() const {
                        "camera model must be SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL or RADIAL, got ", camera_model);
   ORCHARD_CHECK_OPTION(max_num_features > 0, "max_num_features must be positive, got ", max_num_features);
   ORCHARD_CHECK_OPTION(overlap >= 1, "matching overlap must be at least 1, got ", overlap);
+  ORCHARD_CHECK_OPTION(triangulation_overlap >= 1, "triangulation matching overlap must be at least 1, got ",
+                       triangulation_overlap);
   ORCHARD_CHECK_OPTION(mapper_attempts >= 1, "mapper attempts must be at least 1, got ", mapper_attempts);
   ORCHARD_CHECK_OPTION(retry_unregistered_fraction >= 0 && retry_unregistered_fraction <= 1,
                        "retry unregistered fraction must be in [0, 1], got ", retry_unregistered_fraction);
@@ -88,6 +90,7 @@ void MatchColmapFeatures(const fs::path& image_dir, const fs::path& workspace, c
   RunStep("sequential_matcher",
           exe + " sequential_matcher --database_path " + db +
               " --SiftMatching.use_gpu 0 --SequentialMatching.overlap " + std::to_string(options.overlap) +
+              " --SequentialMatching.quadratic_overlap " + (options.quadratic_overlap ? "1" : "0") +
               " --SiftMatching.num_threads " + threads,
           log);
 }
@@ -100,7 +103,10 @@ ColmapModel TriangulateColmapPoints(const fs::path& image_dir, const ColmapModel
   std::vector<std::string> names;
   for (const auto& [id, image] : posed.images) names.push_back(image.name);
   std::sort(names.begin(), names.end());
-  MatchColmapFeatures(image_dir, workspace, options, names, &camera);
+  ColmapRunnerOptions matching = options;
+  matching.overlap = options.triangulation_overlap;
+  matching.quadratic_overlap = false;
+  MatchColmapFeatures(image_dir, workspace, matching, names, &camera);
   // The given poses without points: COLMAP matches frames to the database by
   // name (--clear_points 1 takes the database's image ids and keypoints); a
   // fresh database with one camera gives it id 1.

@@ -27,8 +27,17 @@ struct ColmapRunnerOptions {
   // (docs/synth.md); more features cost time without gain.
   int max_num_features = 2048;
   int first_octave = 0;
-  // Sequential matching: each frame against this many following frames.
+  // Sequential matching: each frame against this many following frames,
+  // and with quadratic_overlap also against the frames 2^k ahead (k <
+  // overlap), COLMAP's default, which bridges a run of blurred frames.
   int overlap = 5;
+  bool quadratic_overlap = true;
+  // Matching for points of given poses (TriangulateColmapPoints): the poses
+  // are held, so no long baselines are needed against drift; 3 following
+  // frames, no quadratic pairs: on seed 503's front 41 -> 18 s a side of 41
+  // frames (matching 31 -> 10 s), 5,168 -> 5,012 points, the ground fitted
+  // as well (docs/side.md, forty-second session).
+  int triangulation_overlap = 3;
   // The mapper's random seed (COLMAP's --random_seed). Which model the
   // mapper builds depends on it: on seed 268's back the same matches gave a
   // model folded on itself (29 of 41 frames) with seed 0 and all 41 frames at

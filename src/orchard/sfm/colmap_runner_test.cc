@@ -65,6 +65,8 @@ TEST(ColmapRunner, PassesItsThreadCountToEveryStep) {
   EXPECT_NE(three.find("--SiftExtraction.num_threads 3"), std::string::npos);
   EXPECT_NE(three.find("--SiftMatching.num_threads 3"), std::string::npos);
   EXPECT_NE(three.find("--Mapper.num_threads 3"), std::string::npos);
+  // The mapper's matching: 5 following frames and the quadratic pairs.
+  EXPECT_NE(three.find("--SequentialMatching.overlap 5 --SequentialMatching.quadratic_overlap 1"), std::string::npos);
   fs::remove(args);
   o.num_threads = 0;
   MatchColmapFeatures(dir, dir / "ws", o);
@@ -96,6 +98,8 @@ TEST(ColmapRunner, TriangulationHoldsTheGivenPosesAndCamera) {
       << a;
   EXPECT_EQ(ReadTextFile(dir / "ws/image_list.txt"), "f0.png\nf1.png\nf2.png\nf3.png\nf4.png\n");
   EXPECT_NE(a.find("point_triangulator"), std::string::npos);
+  // Poses held: the near frames only.
+  EXPECT_NE(a.find("--SequentialMatching.overlap 3 --SequentialMatching.quadratic_overlap 0"), std::string::npos);
   for (const char* held : {"--clear_points 1", "--Mapper.ba_refine_focal_length 0",
                            "--Mapper.ba_refine_principal_point 0", "--Mapper.ba_refine_extra_params 0"})
     EXPECT_NE(a.find(held), std::string::npos) << held;
