@@ -37,7 +37,8 @@ void GroundPlaneOptions::Check() const {
   ORCHARD_CHECK_OPTION(max_tilt_deg > 0 && max_tilt_deg < 90, "ground max tilt must be in (0, 90) degrees, got ",
                        max_tilt_deg);
   ORCHARD_CHECK_OPTION(fine_inlier_fraction >= 0 && fine_inlier_fraction <= inlier_fraction,
-                       "ground fine inlier fraction must be in [0, inlier fraction], got ", fine_inlier_fraction);
+                       "ground fine inlier fraction must be in [0, ", inlier_fraction,
+                       "] (the first band's fraction), got ", fine_inlier_fraction);
   ORCHARD_CHECK_OPTION(below_penalty >= 0, "ground below penalty must be >= 0, got ", below_penalty);
   ORCHARD_CHECK_OPTION(min_inliers >= 3, "ground min inliers must be at least 3, got ", min_inliers);
 }
