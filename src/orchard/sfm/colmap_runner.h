@@ -87,8 +87,9 @@ void MatchColmapFeatures(const fs::path& image_dir, const fs::path& workspace, c
 ColmapRunResult MapColmap(const fs::path& image_dir, const fs::path& workspace, const ColmapRunnerOptions& options);
 
 // Sparse points for poses COLMAP did not solve (GNSS/IMU, another SLAM, the
-// generator's true poses), which carry none: features and matches of the
-// posed frames as for the mapper, then COLMAP's point_triangulator with the
+// generator's true poses), which carry none: features of the posed frames as
+// for the mapper, matched with the next triangulation_overlap frames only (no
+// quadratic pairs), then COLMAP's point_triangulator with the
 // poses and the camera held. Returns `posed` (its ids, poses and camera) with
 // the triangulated points3D and each frame's keypoints as points2D. `posed`
 // must have one camera. Throws orchard::Error when colmap is missing or fails

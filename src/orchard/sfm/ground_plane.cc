@@ -108,17 +108,17 @@ Plane FitGroundPlane(const std::vector<Eigen::Vector3d>& points, const std::vect
          " supporting points (best: ", best_count, " of ", points.size(), ")");
   // The thin layer of ground points within the wide band (options.fine_inlier_fraction).
   double refine_tol = tol;
+  int count = best_count;
   if (options.fine_inlier_fraction > 0) {
     const double fine_tol = options.fine_inlier_fraction * tol / options.inlier_fraction;
     std::vector<Eigen::Vector3d> band;
     for (const auto& x : points)
       if (std::abs(best.SignedDistance(x)) < tol) band.push_back(x);
     Plane fine;
-    if (ransac(band, fine_tol, &fine) && count_inliers(fine, fine_tol) >= options.min_inliers)
-      best = fine, refine_tol = fine_tol;
+    const int fine_count = ransac(band, fine_tol, &fine) ? count_inliers(fine, fine_tol) : 0;
+    if (fine_count >= options.min_inliers) best = fine, refine_tol = fine_tol, count = fine_count;
   }
   // Refine on the inliers (twice, as the inlier set settles).
-  int count = count_inliers(best, refine_tol);
   for (int round = 0; round < 2; ++round) {
     std::vector<Eigen::Vector3d> inliers;
     for (const auto& x : points)
