@@ -132,6 +132,16 @@ void AddSideOptions(CLI::App* cmd, SideOptions* options) {
       ->capture_default_str();
   cmd->add_option("--near-margin", o.clusters.near_margin, "Nearer than row distance - this (m): removed")
       ->capture_default_str();
+  cmd->add_flag("--edge-apples,!--no-edge-apples", o.clusters.edge.enabled,
+                "Count apples seen only as slivers at the frames' top edge, grouped across frames where their rays "
+                "cross (default)");
+  cmd->add_option("--edge-min-pixels", o.clusters.edge.min_pixels,
+                  "Edge apples: a sliver shows at least this many pixels in a frame (0 = auto: 20 for instance masks, "
+                  "50 for a detector's blobs)")
+      ->capture_default_str();
+  cmd->add_option("--edge-window", o.clusters.edge.window,
+                  "Edge apples: slivers at most this many frames apart may be one apple")
+      ->capture_default_str();
   cmd->add_option("--draw-every", o.draw_every, "Annotate every n-th frame (0 = none)")->capture_default_str();
 }
 

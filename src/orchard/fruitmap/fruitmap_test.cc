@@ -8,22 +8,13 @@
 #include "orchard/fruitmap/clusters.h"
 #include "orchard/fruitmap/fruit_points.h"
 #include "orchard/fruitmap/side.h"
+#include "orchard/fruitmap/test_views.h"
 #include "orchard/fruitmap/triangulation.h"
 
 namespace orchard {
 namespace {
 
-// A camera at (x, -2.5, 1.5) looking along +y (world z up), 640x480, f = 500.
-CameraView ViewAt(double x) {
-  CameraView v;
-  v.name = "f";
-  v.width = 640, v.height = 480;
-  v.fx = v.fy = 500, v.cx = 320, v.cy = 240;
-  // Camera axes in world: x_cam = +x, y_cam = -z (down), z_cam = +y.
-  v.R << 1, 0, 0, 0, 0, -1, 0, 1, 0;
-  v.t = -v.R * Eigen::Vector3d(x, -2.5, 1.5);
-  return v;
-}
+using test::ViewAt;
 
 TEST(Triangulation, RecoversKnownPointFromManyViews) {
   const Eigen::Vector3d X(0.3, 0.2, 1.8);

@@ -209,6 +209,7 @@ void ClusterOptions::Check() const {
                        next_row_sparse);
   ORCHARD_CHECK_OPTION(next_row_margin > 0, "next-row margin must be positive, got ", next_row_margin);
   ORCHARD_CHECK_OPTION(near_margin > 0, "near margin must be positive, got ", near_margin);
+  edge.Check();
 }
 
 ClusterOptions::BestViews ResolvedBestViews(const ClusterOptions& o, const SideInputs& in) {
@@ -216,6 +217,11 @@ ClusterOptions::BestViews ResolvedBestViews(const ClusterOptions& o, const SideI
   // Counts per view are apple instances (instance masks or a box detector's
   // boxes, one apple per blob): take the views that show the most apples.
   return !in.counter ? ClusterOptions::BestViews::kCount : ClusterOptions::BestViews::kPixels;
+}
+
+int ResolvedEdgeMinPixels(const ClusterOptions& o, const SideInputs& in) {
+  if (o.edge.min_pixels > 0) return o.edge.min_pixels;
+  return in.detector ? 50 : 20;
 }
 
 const char* BestViewsName(ClusterOptions::BestViews best_views) {
@@ -243,6 +249,57 @@ ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std
   o.Check();
   return CountFruitClusters(views, frames, ground, o, TriangulateFruitPoints(views, frames, o.points));
 }
+
+namespace {
+
+// Appends the apples seen only at the frames' top edge (EdgeAppleOptions) to
+// `r` as kept clusters of one apple each, after the kept clusters, whose
+// points explain the slivers of the apples they hold.
+void AddEdgeApples(const std::vector<CameraView>& views, const std::vector<FruitFrame>& frames, const Plane& ground,
+                   const ClusterOptions& o, ClusterResult* r) {
+  // A sliver a counted cluster's point lies on is that cluster's apple; so
+  // is one that a cluster too small for these rules lies on (`orchard
+  // yield` keeps only clusters of 4 points for the merge, and its slivers
+  // are not apples the 3D stage missed).
+  std::vector<Eigen::Vector3d> explained;
+  for (const auto& c : r->clusters)
+    if (c.status == "kept" || c.status == "too_few_points")
+      for (int i : c.points) explained.push_back(r->points[i].xyz);
+  const RowFrame row{r->row_origin, r->row_along, r->row_across, r->row_up, r->row_distance};
+  if (row.row_distance <= 0) return;  // no kept fruit: nothing tells where the row is
+  const std::vector<EdgeSighting> sightings = FindEdgeSightings(views, frames, explained, row, o.edge);
+  for (const EdgeApple& a : GroupEdgeSightings(sightings, row, o.edge)) {
+    FruitCluster c;
+    c.id = static_cast<int>(r->clusters.size()) + 1;
+    c.edge = true;
+    c.centre = a.centre;
+    c.min = c.max = a.sighting_points[0];
+    for (size_t i = 0; i < a.sightings.size(); ++i) {
+      const EdgeSighting& s = sightings[a.sightings[i]];
+      const Eigen::Vector3d& X = a.sighting_points[i];
+      c.min = c.min.cwiseMin(X), c.max = c.max.cwiseMax(X);
+      c.points.push_back(static_cast<int>(r->points.size()));
+      r->points.push_back({X, s.frame, s.blobs[0], static_cast<int>(a.sightings.size())});
+      r->point_cluster.push_back(static_cast<int>(r->clusters.size()));
+      c.views.push_back({s.frame, s.pixels, 1});
+      const auto at = [&](double distance) {
+        return s.origin + (distance - row.across.dot(s.origin - row.origin)) / row.across.dot(s.direction) * s.direction;
+      };
+      c.edge_rays.emplace_back(at(row.row_distance - o.edge.near_margin), at(row.row_distance + o.edge.far_margin));
+      c.edge_columns.push_back(s.column);
+      c.view_blobs.push_back(s.blobs);
+    }
+    // A sliver shows one apple: every view counts one.
+    c.count = c.count_by_pixels = c.count_by_count = MedianOfBestViews(c.views, o.best_views, &c.count_frames);
+    c.height = ground.SignedDistance(c.centre);
+    c.distance = a.distance;
+    if (c.distance > r->depth_cutoff) c.status = "next_row";
+    if (c.status == "kept") r->count += c.count, ++r->edge_apples;
+    r->clusters.push_back(std::move(c));
+  }
+}
+
+}  // namespace
 
 ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std::vector<FruitFrame>& frames,
                                  const Plane& ground, const ClusterOptions& o, std::vector<FruitPoint> points) {
@@ -404,6 +461,7 @@ ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std
     if (c.status == "kept" && c.distance < r.row_distance - o.near_margin) c.status = "too_near";
     if (c.status == "kept") r.count += c.count;
   }
+  if (o.edge.enabled) AddEdgeApples(views, frames, ground, o, &r);
   return r;
 }
 
@@ -590,7 +648,7 @@ void WriteOutputs(const fs::path& out, const std::vector<fs::path>& image_paths,
                   const ClusterResult& r, const SideOptions& o) {
   std::ostringstream csv;
   csv << "id,x,y,z,extent_x,extent_y,extent_z,points,count,status,height,distance,frames,views,votes_won,votes_lost,"
-         "apple_radius,count_by_pixels,count_by_count\n";
+         "apple_radius,count_by_pixels,count_by_count,edge\n";
   csv.precision(4);
   csv << std::fixed;
   for (const auto& c : r.clusters) {
@@ -601,9 +659,22 @@ void WriteOutputs(const fs::path& out, const std::vector<fs::path>& image_paths,
     for (size_t i = 0; i < c.count_frames.size(); ++i)
       csv << (i ? ";" : "") << image_paths[c.count_frames[i]].filename().string();
     csv << ',' << c.views.size() << ',' << c.votes_won << ',' << c.votes_lost << ',' << c.apple_radius_seen << ','
-        << c.count_by_pixels << ',' << c.count_by_count << '\n';
+        << c.count_by_pixels << ',' << c.count_by_count << ',' << (c.edge ? 1 : 0) << '\n';
   }
   WriteTextFileAtomic(out / "clusters.csv", csv.str());
+  // Edge apples' rays: written always, so none is left from an earlier run.
+  std::ostringstream rays;
+  rays << "cluster,frame,column,pixels,near_x,near_y,near_z,far_x,far_y,far_z\n";
+  rays.precision(4);
+  rays << std::fixed;
+  for (const auto& c : r.clusters)
+    for (size_t i = 0; i < c.edge_rays.size(); ++i) {
+      const auto& [a, b] = c.edge_rays[i];
+      rays << c.id << ',' << image_paths[c.views[i].frame].filename().string() << ',' << c.edge_columns[i] << ','
+           << c.views[i].pixels << ',' << a.x() << ',' << a.y() << ',' << a.z() << ',' << b.x() << ',' << b.y() << ','
+           << b.z() << '\n';
+    }
+  WriteTextFileAtomic(out / "edge_rays.csv", rays.str());
   std::ostringstream ply;
   ply << "ply\nformat ascii 1.0\nelement vertex " << r.points.size()
       << "\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\nproperty uchar green\n"
@@ -951,6 +1022,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   s.fruit_s = stopwatch.Lap();
   const auto resolved = [&in](ClusterOptions c) {
     c.best_views_by = ResolvedBestViews(c, in);
+    c.edge.min_pixels = ResolvedEdgeMinPixels(c, in);
     return c;
   };
   const ClusterOptions clusters = resolved(o.clusters);
@@ -1118,7 +1190,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
       {"depth_cutoff_from", r.depth_cutoff_from_gap ? "gap" : "margin"},
       {"fruit_points", r.points.size()},
       {"clusters", {{"total", r.clusters.size()}, {"kept", s.clusters_kept}, {"removed", removed},
-                    {"duplicates_joined", r.duplicates_joined}}},
+                    {"duplicates_joined", r.duplicates_joined}, {"edge_apples", r.edge_apples}}},
       {"warnings", warnings},
       {"timings_s", {{"poses", s.poses_s}, {"fruit", s.fruit_s}, {"clusters", s.clusters_s}, {"outputs", s.outputs_s}}},
   };

@@ -15,6 +15,7 @@
 #include "orchard/count/counter.h"
 #include "orchard/detect/detector.h"
 #include "orchard/fruitmap/clusters.h"
+#include "orchard/fruitmap/edge_apples.h"
 #include "orchard/fruitmap/fruit_points.h"
 #include "orchard/sfm/camera_view.h"
 #include "orchard/sfm/colmap_runner.h"
@@ -150,6 +151,9 @@ struct ClusterOptions {
   // 1.0 m counted 65 chance apples (1.0 before: within 3% 34 -> 38 of 40,
   // MAE 1.48 -> 1.30%; docs/side.md).
   double near_margin = 0.6;
+  // Apples seen only as slivers at the frames' top edge (edge_apples.h): each
+  // is one more kept cluster of one apple, marked `edge`.
+  EdgeAppleOptions edge;
   void Check() const;
 };
 
@@ -176,6 +180,14 @@ struct FruitCluster {
   double distance = 0;  // centre from the camera path, across the row (m)
   // kept, too_few_points, no_views, few_views, ghost, small, fallen, next_row, too_near
   std::string status = "kept";
+  // Seen only as slivers at the frames' top edge (EdgeAppleOptions): one
+  // apple, its points the slivers' rays at its distance.
+  bool edge = false;
+  // An edge apple's sightings: each sliver's ray through the row's fruit
+  // (EdgeAppleOptions' margins about the row distance), near end first. The
+  // merge links it along these (side output edge_rays.csv).
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> edge_rays;
+  std::vector<double> edge_columns;  // each sliver's middle (COLMAP pixel x), as the views
 };
 
 struct ClusterResult {
@@ -194,6 +206,7 @@ struct ClusterResult {
   int count = 0;            // sum over kept clusters
   int single_frame_sum = 0; // sum of all blob counts over all frames
   int duplicates_joined = 0;  // components joined to a partner (ClusterOptions::duplicate_shared_fraction)
+  int edge_apples = 0;        // kept clusters seen only at the frames' top edge (FruitCluster::edge)
 };
 
 // The next-row cut (ClusterOptions::next_row_gap) from the distances of
@@ -325,6 +338,9 @@ struct SideInputs {
 // options.best_views_by with kAuto decided for these inputs: kCount when
 // blobs are counted one apple each (no counter: instance masks, boxes), else kPixels.
 ClusterOptions::BestViews ResolvedBestViews(const ClusterOptions& options, const SideInputs& in);
+// options.edge.min_pixels with 0 (auto) decided for these inputs: 20 for
+// instance masks, 50 for a detector's blobs (EdgeAppleOptions::min_pixels).
+int ResolvedEdgeMinPixels(const ClusterOptions& options, const SideInputs& in);
 // "auto", "pixels" or "count", as the command line and the outputs name them.
 const char* BestViewsName(ClusterOptions::BestViews best_views);
 // Whether a ground refit that takes the scale from `scale` to `refit_scale`

@@ -44,7 +44,8 @@ SideTruthScore CreditApples(const std::vector<ClusterVotes>& clusters, const std
   for (size_t k = 0; k < clusters.size(); ++k) {
     s.count += clusters[k].count;
     for (const auto& [apple, n] : clusters[k].votes)
-      if (n >= min_votes && visible.count(apple)) pairs.emplace_back(-n, static_cast<int>(k), apple);
+      if (n >= (clusters[k].min_votes > 0 ? clusters[k].min_votes : min_votes) && visible.count(apple))
+        pairs.emplace_back(-n, static_cast<int>(k), apple);
   }
   std::sort(pairs.begin(), pairs.end());
   s.clusters.resize(clusters.size());
@@ -99,8 +100,12 @@ SideTruthScore ScoreSideAgainstTruth(const std::vector<CameraView>& views, const
     kept.push_back(static_cast<int>(c));
     ClusterVotes& v = votes.emplace_back();
     v.count = cluster.count;
+    // An edge apple's points lie on its slivers only in their own frames
+    // (elsewhere their distance is a guess): one vote each, enough.
+    if (cluster.edge) v.min_votes = 1;
     for (int p : cluster.points)
       for (size_t f = 0; f < views.size(); ++f) {
+        if (cluster.edge && static_cast<int>(f) != result.points[p].frame) continue;
         Eigen::Vector2d pixel;
         if (views[f].Depth(result.points[p].xyz) <= 0 || !views[f].Project(result.points[p].xyz, &pixel)) continue;
         if (const int id = AppleAt(truth_masks[f], pixel, o.window_px); id >= 0) ++v.votes[id];

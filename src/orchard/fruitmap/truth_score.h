@@ -75,6 +75,9 @@ struct SideTruthScore {
 struct ClusterVotes {
   int count = 0;
   std::map<int, int> votes;
+  // Votes an apple needs (0: CreditApples' min_votes). An edge apple
+  // (FruitCluster::edge) votes once per sliver, in the sliver's frame: 1.
+  int min_votes = 0;
 };
 
 // The crediting ScoreSideAgainstTruth does, from the votes: (cluster, apple)

@@ -163,6 +163,17 @@ TEST(CreditApples, MostVotesFirstEachAppleOnceEachClusterUpToItsCount) {
   EXPECT_EQ(higher.clusters[2].role, "over_counted");
 }
 
+TEST(CreditApples, AnEdgeAppleIsCreditedWithTheOneVoteOfItsSliver) {
+  // Visible 0, 1. Cluster 1 votes once for apple 1: below min votes, unless
+  // it is an edge apple (one vote per sliver, in the sliver's frame).
+  std::vector<ClusterVotes> clusters = {{1, {{0, 6}}}, {1, {{1, 1}}}};
+  EXPECT_EQ(CreditApples(clusters, {0, 1}, 2).missed, 1);
+  clusters[1].min_votes = 1;
+  const SideTruthScore s = CreditApples(clusters, {0, 1}, 2);
+  EXPECT_EQ(s.missed, 0);
+  EXPECT_EQ(s.clusters[1].role, "found");
+}
+
 TEST(ScoreSideAgainstTruth, MasksThatDoNotMatchTheViewsFail) {
   const std::vector<CameraView> views = Views(2);
   ClusterResult r;

@@ -686,6 +686,57 @@ TEST(SharedCountTest, ClustersLinkedToNothingCountTheirUnlinkedCount) {
   EXPECT_EQ(CountSharedApples(front, back, SharedCountOptions()).total, 3);
 }
 
+// An edge apple (seen only as slivers at the top edge) with one ray from
+// `near` to `far`; its point is a guess along it.
+SideCluster EdgeApple(int id, const Eigen::Vector3d& near, const Eigen::Vector3d& far) {
+  SideCluster c = Cluster(id, 1, {0.5 * (near + far)});
+  c.edge = true;
+  c.ray_ends = {near, far};
+  return c;
+}
+
+TEST(SharedCountTest, EdgeApplesLinkAlongTheirSliversRays) {
+  // Front frame, the row 2.5 m across. The back's top edge rises away from
+  // its camera path (y = 5): its sliver rays run from y 3.1 (2.45 m up) to
+  // 1.5 (2.85 m up), 2.6 m up at the row; the front's the other way.
+  const Eigen::Vector3d tracked(0, 2.5, 2.62);  // the front tracks this apple
+  const Eigen::Vector3d dx(0.1, 0, 0);
+  const std::vector<SideCluster> front = {
+      Cluster(1, 1, {tracked}),
+      EdgeApple(2, Eigen::Vector3d(0, 1.9, 2.45) + dx, Eigen::Vector3d(0, 3.5, 2.85) + dx),  // also the back's edge apple 2
+  };
+  const std::vector<SideCluster> back = {
+      EdgeApple(1, {0, 3.1, 2.45}, {0, 1.5, 2.85}),  // the sliver of the front's tracked apple
+      EdgeApple(2, Eigen::Vector3d(0, 3.1, 2.45) + dx, Eigen::Vector3d(0, 1.5, 2.85) + dx),
+  };
+  const SharedCount s = CountSharedApples(front, back, SharedCountOptions());
+  EXPECT_EQ(s.front, 2);
+  EXPECT_EQ(s.back, 2);
+  EXPECT_DOUBLE_EQ(s.back_shared[0], 1.0);  // all of it is the tracked apple
+  EXPECT_EQ(s.back_edge_on, (std::vector<int>{0, -1}));
+  EXPECT_EQ(s.front_edge_on, (std::vector<int>{-1, -1}));
+  ASSERT_EQ(s.groups.size(), 1u);  // the two edge apples' rays meet
+  EXPECT_EQ(s.groups[0].front, std::vector<int>{1});
+  EXPECT_DOUBLE_EQ(s.shared, 2.0);
+  EXPECT_EQ(s.total, 2);
+  // Beside the tracked apple's line of sight (6 cm) or well below it, the
+  // back's sliver is another apple.
+  std::vector<SideCluster> beside = back;
+  beside[0] = EdgeApple(1, {0.06, 3.1, 2.45}, {0.06, 1.5, 2.85});
+  EXPECT_EQ(CountSharedApples(front, beside, SharedCountOptions()).total, 3);
+  beside[0] = EdgeApple(1, {0, 3.1, 2.40}, {0, 1.5, 2.80});  // 2.55 m up at the row: the apple 7 cm above
+  EXPECT_EQ(CountSharedApples(front, beside, SharedCountOptions()).total, 2);
+  beside[0] = EdgeApple(1, {0, 3.1, 2.55}, {0, 1.5, 2.95});  // 2.7 m up: the apple 8 cm below
+  EXPECT_EQ(CountSharedApples(front, beside, SharedCountOptions()).total, 3);
+  // Two edge apples whose rays do not meet are two apples.
+  std::vector<SideCluster> apart = back;
+  apart[1] = EdgeApple(2, Eigen::Vector3d(0, 3.1, 2.45) + 2 * dx, Eigen::Vector3d(0, 1.5, 2.85) + 2 * dx);
+  EXPECT_EQ(CountSharedApples(front, apart, SharedCountOptions()).total, 3);
+  SharedCountOptions bad;
+  bad.edge_across = 0;
+  EXPECT_THROW(bad.Check(), Error);
+}
+
 TEST(MergeTruthTest, TakesTheMergedCountApart) {
   // Visible: front 0-5, back 3-8 (3, 4, 5 from both sides), 9 apples in all.
   const Eigen::Vector3d a(0, 2.5, 1.5), dx(0.5, 0, 0), e(0.02, 0, 0);
@@ -785,6 +836,42 @@ TEST(SideCloudTest, LoadsKeptAndFallenClusters) {
     ADD_FAILURE() << "no error";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("has no column count_by_views"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SideCloudTest, LoadsEdgeApplesWithTheirRays) {
+  const fs::path dir = test::FreshTempDir("side_cloud_edge");
+  // A row frame shifted by 1 m along x.
+  WriteTextFileAtomic(dir / "side.json",
+                      R"({"count": 2, "row_frame": {"origin": [1, 0, 0], "along": [1, 0, 0], "across": [0, 1, 0],)"
+                      R"( "up": [0, 0, 1]}})");
+  WriteTextFileAtomic(dir / "clusters.csv",
+                      "id,x,y,z,extent_x,extent_y,extent_z,points,count,status,count_by_pixels,count_by_count,edge\n"
+                      "1,1,2,1,0,0,0,1,1,kept,1,1,0\n"
+                      "2,2,2.5,2.6,0,0,0,1,1,kept,1,1,1\n");
+  WriteTextFileAtomic(dir / "fruit.ply",
+                      "ply\nformat ascii 1.0\nend_header\n1 2 1 0 0 0 1\n2 2.5 2.6 0 0 0 2\n");
+  WriteTextFileAtomic(dir / "edge_rays.csv",
+                      "cluster,frame,column,pixels,near_x,near_y,near_z,far_x,far_y,far_z\n"
+                      "2,f7.png,310.5,42,2,1.9,2.45,2,3.5,2.85\n"
+                      "1,f7.png,0,0,9,9,9,9,9,9\n");  // not an edge apple: ignored
+  SideCloud cloud = LoadSideCloud(dir, "front");
+  ASSERT_EQ(cloud.clusters.size(), 2u);
+  EXPECT_FALSE(cloud.clusters[0].edge);
+  EXPECT_TRUE(cloud.clusters[0].ray_ends.empty());
+  ASSERT_TRUE(cloud.clusters[1].edge);
+  ASSERT_EQ(cloud.clusters[1].ray_ends.size(), 2u);
+  EXPECT_TRUE(cloud.clusters[1].ray_ends[0].isApprox(Eigen::Vector3d(1, 1.9, 2.45)));  // in the row frame
+  ScaleSideCloud(&cloud, 2);
+  EXPECT_TRUE(cloud.clusters[1].ray_ends[1].isApprox(Eigen::Vector3d(2, 7, 5.7)));
+  EXPECT_EQ(WithoutEdgeApples(cloud).clusters.size(), 1u);
+  // A malformed rays file is an error naming it.
+  WriteTextFileAtomic(dir / "edge_rays.csv", "cluster,frame\n2,f7.png,1\n");
+  try {
+    LoadSideCloud(dir, "front");
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("edge_rays.csv line 2"), std::string::npos) << e.what();
   }
 }
 

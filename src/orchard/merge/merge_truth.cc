@@ -49,7 +49,13 @@ MergeTruth ScoreMergeAgainstTruth(const std::vector<SideCluster>& front, const s
     if (f == in_front.end() || b == in_back.end()) continue;
     ++t.held_both;
     const int g = front_group[f->second];
-    if (g >= 0 && g == back_group[b->second])
+    // An edge apple on the other side's cluster that holds the same apple is
+    // counted once too (all its count shared).
+    const auto on = [](const std::vector<int>& edge_on, int i) {
+      return i < static_cast<int>(edge_on.size()) ? edge_on[i] : -1;
+    };
+    if ((g >= 0 && g == back_group[b->second]) || on(shared.front_edge_on, f->second) == b->second ||
+        on(shared.back_edge_on, b->second) == f->second)
       ++t.linked;
     else
       ++t.unlinked;

@@ -329,6 +329,7 @@ Levelling LevelOnSparseGround(SideCloud* side, const RowRegistrationOptions& o, 
   for (auto* clusters : {&side->clusters, &side->fallen})
     for (auto& c : *clusters) {
       for (auto& p : c.points) p = move(p);
+      for (auto& p : c.ray_ends) p = move(p);
       UpdateClusterExtent(&c);
     }
   l.transform.linear() = l.scale * rot;

@@ -11,6 +11,8 @@ namespace orchard {
 void SharedCountOptions::Check() const {
   ORCHARD_CHECK_OPTION(intersection_distance > 0, "intersection distance must be positive, got ",
                        intersection_distance);
+  ORCHARD_CHECK_OPTION(edge_across > 0 && edge_below >= 0 && edge_above > 0,
+                       "edge link distances must be positive, got ", edge_across, ", ", edge_below, ", ", edge_above);
 }
 
 namespace {
@@ -33,6 +35,45 @@ bool BoxesMeet(const SideCluster& a, const SideCluster& b, double margin) {
   return true;
 }
 
+// Whether p lies where the apple of the sliver on the ray a -> b may hang:
+// within `across` of it horizontally, from `below` under it to `above` over it.
+bool OnSliverRay(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double across,
+                 double below, double above) {
+  const Eigen::Vector2d d = (b - a).head<2>();
+  const double len2 = d.squaredNorm();
+  const double t = len2 > 0 ? std::clamp((p - a).head<2>().dot(d) / len2, 0.0, 1.0) : 0.0;
+  const Eigen::Vector3d q = a + t * (b - a);
+  const double dz = p.z() - q.z();
+  return (p - q).head<2>().norm() <= across && dz >= -below && dz <= above;
+}
+
+bool OnAnySliverRay(const Eigen::Vector3d& p, const SideCluster& edge, double across, double below, double above) {
+  for (size_t i = 0; i + 1 < edge.ray_ends.size(); i += 2)
+    if (OnSliverRay(p, edge.ray_ends[i], edge.ray_ends[i + 1], across, below, above)) return true;
+  return false;
+}
+
+// Whether an edge apple (`edge`, with rays) and a cluster of the other side
+// are one apple (SharedCountOptions::edge_across and the rest).
+bool EdgeLinks(const SideCluster& edge, const SideCluster& other, const SharedCountOptions& o) {
+  if (!other.edge || other.ray_ends.empty()) {
+    for (const auto& p : other.points)
+      if (OnAnySliverRay(p, edge, o.edge_across, o.edge_below, o.edge_above)) return true;
+    return false;
+  }
+  // Two edge apples: samples of one's rays every centimetre against the other's.
+  for (size_t i = 0; i + 1 < other.ray_ends.size(); i += 2) {
+    const Eigen::Vector3d& a = other.ray_ends[i];
+    const Eigen::Vector3d& b = other.ray_ends[i + 1];
+    const int steps = std::max(1, static_cast<int>((b - a).norm() / 0.01));
+    for (int k = 0; k <= steps; ++k)
+      if (OnAnySliverRay(a + (b - a) * (static_cast<double>(k) / steps), edge, o.edge_across, o.edge_above,
+                         o.edge_above))
+        return true;
+  }
+  return false;
+}
+
 int Find(std::vector<int>& parent, int i) {
   while (parent[i] != i) i = parent[i] = parent[parent[i]];
   return i;
@@ -48,14 +89,36 @@ SharedCount CountSharedApples(const std::vector<SideCluster>& front, const std::
   const double d = o.intersection_distance;
   std::vector<int> parent(nf + nb);
   std::iota(parent.begin(), parent.end(), 0);
+  const auto is_edge = [](const SideCluster& c) { return c.edge && !c.ray_ends.empty(); };
+  // An edge apple on the line of sight of the other side's (tracked) cluster
+  // is an apple that cluster holds: all its count is shared, and it joins no
+  // group. Edge apples linked only to the other side's edge apples form
+  // groups like the rest.
+  r.front_edge_on.assign(nf, -1);
+  r.back_edge_on.assign(nb, -1);
+  std::vector<std::pair<int, int>> edge_pairs;
   for (int f = 0; f < nf; ++f)
     for (int b = 0; b < nb; ++b) {
+      const bool edge_f = is_edge(front[f]), edge_b = is_edge(back[b]);
+      if (edge_f || edge_b) {
+        if (!EdgeLinks(edge_f ? front[f] : back[b], edge_f ? back[b] : front[f], o)) continue;
+        r.links.push_back({f, b, 1, 1});
+        if (edge_f && edge_b)
+          edge_pairs.emplace_back(f, b);
+        else if (edge_f && r.front_edge_on[f] < 0)
+          r.front_edge_on[f] = b;
+        else if (edge_b && r.back_edge_on[b] < 0)
+          r.back_edge_on[b] = f;
+        continue;
+      }
       if (!BoxesMeet(front[f], back[b], d)) continue;
       const double in_f = FractionNear(front[f], back[b], d);
       if (in_f <= 0) continue;
       r.links.push_back({f, b, in_f, FractionNear(back[b], front[f], d)});
       parent[Find(parent, f)] = Find(parent, nf + b);
     }
+  for (const auto& [f, b] : edge_pairs)
+    if (r.front_edge_on[f] < 0 && r.back_edge_on[b] < 0) parent[Find(parent, f)] = Find(parent, nf + b);
   std::map<int, SharedGroup> groups;
   for (int i = 0; i < nf + nb; ++i) {
     SharedGroup& g = groups[Find(parent, i)];
@@ -68,7 +131,14 @@ SharedCount CountSharedApples(const std::vector<SideCluster>& front, const std::
   r.back_shared.assign(nb, 0);
   for (const auto& c : front) r.front_counts.push_back(c.count);
   for (const auto& c : back) r.back_counts.push_back(c.count);
+  for (int f = 0; f < nf; ++f)
+    if (r.front_edge_on[f] >= 0) r.front_shared[f] = front[f].count, r.shared += front[f].count;
+  for (int b = 0; b < nb; ++b)
+    if (r.back_edge_on[b] >= 0) r.back_shared[b] = back[b].count, r.shared += back[b].count;
   for (auto& [root, g] : groups) {
+    const bool on_tracked = g.front.size() + g.back.size() == 1 &&
+                            (g.front.empty() ? r.back_edge_on[g.back[0]] : r.front_edge_on[g.front[0]]) >= 0;
+    if (on_tracked) continue;
     if (g.front.empty() || g.back.empty()) {
       for (int f : g.front)
         if (front[f].count_unlinked >= 0) r.front_counts[f] = front[f].count_unlinked;

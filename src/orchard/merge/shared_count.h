@@ -1,7 +1,7 @@
 // Counting apples seen from both sides once: inclusion-exclusion over the
 // front and back clusters that intersect once both are in one frame.
 // Clusters of the two sides whose fruit points come within the intersection
-// distance are linked; each group of linked clusters holds
+// distance are linked (edge apples: along their rays); each group of linked clusters holds
 // |F u B| = |F| + |B| - |F n B| apples, with |F n B| = min(|F|, |B|): the
 // side that sees fewer of the group's apples sees a subset of what the other
 // side sees. total = sum of all counts - sum of the groups' intersections.
@@ -22,6 +22,16 @@ struct SharedCountOptions {
   // visible part); 8 cm gave the merged counts closest to the truth on the
   // development rows (seed 1, flat seed 2), with little change from 6 to 10.
   double intersection_distance = 0.08;
+  // An edge apple (SideCluster::edge: seen only as slivers at the frames'
+  // top edge) is linked along its slivers' rays: to a cluster of the other
+  // side with a point within edge_across (m) of a ray horizontally and from
+  // edge_below under it to edge_above over it (a sliver is the apple's lower
+  // part: its centre hangs up to a radius above the frame's edge), and to an
+  // edge apple of the other side whose rays pass within edge_across and
+  // edge_above of its own (both slivers show the apple's lower part).
+  double edge_across = 0.04;
+  double edge_below = 0.03;
+  double edge_above = 0.08;
   void Check() const;
 };
 
@@ -49,6 +59,10 @@ struct SharedCount {
   std::vector<double> front_shared, back_shared;
   // Per cluster: the count used (count, or count_unlinked when in no group).
   std::vector<int> front_counts, back_counts;
+  // Per cluster: for an edge apple on the line of sight of the other side's
+  // tracked cluster (all its count shared, in no group), that cluster's
+  // index; else -1.
+  std::vector<int> front_edge_on, back_edge_on;
 };
 
 // Both cluster lists in one frame.

@@ -1,6 +1,7 @@
 #include "orchard/merge/side_cloud.h"
 
 #include <algorithm>
+#include <stdexcept>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -29,6 +30,7 @@ void ScaleSideCloud(SideCloud* side, double scale) {
   for (auto* clusters : {&side->clusters, &side->fallen})
     for (auto& c : *clusters) {
       for (auto& p : c.points) p *= scale;
+      for (auto& p : c.ray_ends) p *= scale;
       UpdateClusterExtent(&c);
     }
 }
@@ -38,6 +40,14 @@ SideCloud WithFallenLandmarks(const SideCloud& side) {
   with.clusters.insert(with.clusters.end(), side.fallen.begin(), side.fallen.end());
   with.fallen.clear();
   return with;
+}
+
+SideCloud WithoutEdgeApples(const SideCloud& side) {
+  SideCloud without = side;
+  without.clusters.erase(std::remove_if(without.clusters.begin(), without.clusters.end(),
+                                        [](const SideCluster& c) { return c.edge; }),
+                         without.clusters.end());
+  return without;
 }
 
 Eigen::Isometry3d RowFrameTransform(const Eigen::Vector3d& origin, const Eigen::Vector3d& along,
@@ -92,6 +102,9 @@ SideCloud LoadSideCloud(const fs::path& dir, const std::string& name, const std:
       Fail(name, " side: ", csv_path.string(), " has no column ", unlinked_count_column,
            " (made by an older version? run the side again)");
     const size_t unlinked_col = static_cast<size_t>(unlinked_it - header.begin());
+    // Sides written before edge apples have no `edge` column.
+    const auto edge_it = std::find(header.begin(), header.end(), "edge");
+    const size_t edge_col = edge_it == header.end() ? 0 : static_cast<size_t>(edge_it - header.begin());
     int row = 1;
     while (std::getline(csv, line)) {
       ++row;
@@ -104,6 +117,7 @@ SideCloud LoadSideCloud(const fs::path& dir, const std::string& name, const std:
         c.id = std::stoi(f[0]);
         c.count = std::stoi(f[8]);
         c.count_unlinked = std::stoi(f[unlinked_col]);
+        c.edge = edge_col > 0 && edge_col < f.size() && f[edge_col] == "1";
       } catch (const std::exception&) {
         Fail(name, " side: ", csv_path.string(), " line ", row, ": bad id or count");
       }
@@ -134,6 +148,33 @@ SideCloud LoadSideCloud(const fs::path& dir, const std::string& name, const std:
       if (it != index.end()) it->second->points.push_back(cloud.to_row * p);
     }
     if (header) Fail(name, " side: ", ply_path.string(), " has no PLY header");
+  }
+  // Edge apples' rays.
+  const fs::path rays_path = dir / "edge_rays.csv";
+  if (fs::is_regular_file(rays_path)) {
+    std::istringstream csv(ReadTextFile(rays_path));
+    std::string line;
+    std::getline(csv, line);
+    int row = 1;
+    while (std::getline(csv, line)) {
+      ++row;
+      const std::vector<std::string> f = SplitCsvLine(line);
+      Eigen::Vector3d a, b;
+      int id = 0;
+      try {
+        if (f.size() != 10) throw std::invalid_argument("fields");
+        id = std::stoi(f[0]);
+        a = {std::stod(f[4]), std::stod(f[5]), std::stod(f[6])};
+        b = {std::stod(f[7]), std::stod(f[8]), std::stod(f[9])};
+      } catch (const std::exception&) {
+        Fail(name, " side: ", rays_path.string(), " line ", row,
+             " is not 'cluster,frame,column,pixels,near x,y,z,far x,y,z'");
+      }
+      const auto it = index.find(id);
+      if (it == index.end() || !it->second->edge) continue;
+      it->second->ray_ends.push_back(cloud.to_row * a);
+      it->second->ray_ends.push_back(cloud.to_row * b);
+    }
   }
   // Sparse points (COLMAP text: "id x y z r g b error track..."); the side
   // writes sparse/ for the poses it solved and for given poses it

@@ -24,6 +24,12 @@ struct SideCluster {
   std::vector<Eigen::Vector3d> points;  // fruit points, row frame
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
   Eigen::Vector3d min = Eigen::Vector3d::Zero(), max = Eigen::Vector3d::Zero();
+  // Seen only as slivers at the frames' top edge (clusters.csv `edge`): its
+  // place along the slivers' rays is a guess, so the merge links it along
+  // them (edge_rays.csv: each ray's ends in the row's fruit, consecutive
+  // pairs here, moved with the points), and registrations leave it out.
+  bool edge = false;
+  std::vector<Eigen::Vector3d> ray_ends;
 };
 
 struct SideCloud {
@@ -56,6 +62,9 @@ void ScaleSideCloud(SideCloud* side, double scale);
 // registration (fallen emptied).
 SideCloud WithFallenLandmarks(const SideCloud& side);
 
+// A copy without the edge apples (SideCluster::edge), for registrations.
+SideCloud WithoutEdgeApples(const SideCloud& side);
+
 // The row frame as a transform from origin and axes (columns of the rotation
 // are along, across, up).
 Eigen::Isometry3d RowFrameTransform(const Eigen::Vector3d& origin, const Eigen::Vector3d& along,
@@ -64,6 +73,7 @@ Eigen::Isometry3d RowFrameTransform(const Eigen::Vector3d& origin, const Eigen::
 // Reads side.json (row_frame, count), clusters.csv (kept and fallen clusters,
 // their counts; count_unlinked from the column `unlinked_count_column`, e.g.
 // "count_by_count"), fruit.ply (points with cluster ids) and, when present,
+// edge_rays.csv (an edge apple's rays),
 // sparse/points3D.txt and images.txt of `side_dir`. Throws orchard::Error naming the file
 // when one is missing or malformed.
 SideCloud LoadSideCloud(const fs::path& side_dir, const std::string& name,

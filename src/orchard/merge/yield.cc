@@ -73,6 +73,7 @@ SideTruthScore CreditMergeClusters(const SideInputs& side, const std::vector<Sid
   for (const SideCluster& c : clusters) {
     ClusterVotes& v = votes.emplace_back();
     v.count = c.count;
+    if (c.edge) v.min_votes = 1;  // as the side credited it (ScoreSideAgainstTruth)
     const std::string id = std::to_string(c.id);
     if (truth.at("votes").contains(id))
       for (const auto& [apple, n] : truth.at("votes").at(id).items()) v.votes[std::stoi(apple)] = n.get<int>();
@@ -279,7 +280,9 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
   // once for the registrations tried; the given poses' check below needs the
   // back as the fruit registration rescaled it.
   const auto landmarks = [&](const SideCloud& side) {
-    return o.fallen_landmarks ? WithFallenLandmarks(side) : side;
+    // Edge apples' places along their rays are not known: no landmarks.
+    const SideCloud without_edges = WithoutEdgeApples(side);
+    return o.fallen_landmarks ? WithFallenLandmarks(without_edges) : without_edges;
   };
   const SideCloud front_marks = landmarks(front_cloud), back_marks = landmarks(back_cloud);
   // The transform the given poses imply when both are in one frame.
@@ -303,7 +306,8 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
       }
       if (o.row_registration) {
         // A few clusters can match by chance: the canopies must agree too.
-        const double c = CanopyProfileCorrelation(front_cloud, scaled_back, y.registration.back_to_front, row_options);
+        const double c = CanopyProfileCorrelation(WithoutEdgeApples(front_cloud), WithoutEdgeApples(scaled_back),
+                                                  y.registration.back_to_front, row_options);
         if (!std::isnan(c)) {
           y.registration.has_profile = true, y.registration.correlation = c;
           if (c < row_options.min_correlation)
@@ -396,6 +400,7 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
   std::vector<SideCluster> back_in_front = back_cloud.clusters;
   for (auto& c : back_in_front) {
     for (auto& p : c.points) p = y.registration.back_to_front * p;
+    for (auto& p : c.ray_ends) p = y.registration.back_to_front * p;
     UpdateClusterExtent(&c);
   }
   SharedCountOptions shared_options = o.shared;
@@ -524,6 +529,8 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
       {"split_counted_blobs", o.side.split_counted_blobs},
       {"vote_near_first", o.side.clusters.vote_near_first},
       {"duplicate_shared_fraction", o.side.clusters.duplicate_shared_fraction},
+      {"edge_apples", o.side.clusters.edge.enabled},
+      {"edge_min_pixels", ResolvedEdgeMinPixels(o.side.clusters, in.front)},
       {"best_views_by", BestViewsName(ResolvedBestViews(o.side.clusters, in.front))},
       {"sides_best_views_by", BestViewsName(ResolvedBestViews(one_side, in.front))},
       {"unlinked_count", unlinked_column},
