@@ -160,6 +160,8 @@ TEST(EdgeApples, TheThreeDStageCountsAnAppleSeenOnlyAtTheTopEdge) {
     EXPECT_EQ(c.points.size(), 2u);
   }
   EXPECT_EQ(edge, 1);
+  // Its points follow the triangulated ones.
+  EXPECT_EQ(static_cast<size_t>(r.triangulated_points) + 2, r.points.size());
   // Off, the apple is not counted.
   o.edge.enabled = false;
   EXPECT_EQ(CountFruitClusters(views, frames, ground, o).count, 3);

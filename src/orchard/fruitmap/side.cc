@@ -310,6 +310,7 @@ ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std
   for (const auto& f : frames)
     for (int c : f.counts) r.single_frame_sum += c;
   r.points = std::move(points);
+  r.triangulated_points = static_cast<int>(r.points.size());
   std::vector<Eigen::Vector3d> xyz;
   for (const auto& p : r.points) xyz.push_back(p.xyz);
   int k = 0;
@@ -1053,7 +1054,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   }
   const auto fruit_of = [](const ClusterResult& result) {
     std::vector<Eigen::Vector3d> fruit;
-    for (const auto& p : result.points) fruit.push_back(p.xyz);
+    for (int i = 0; i < result.triangulated_points; ++i) fruit.push_back(result.points[i].xyz);
     return fruit;
   };
   size_t logged = check.warnings.size();  // the path's, logged above
@@ -1106,7 +1107,8 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   // apple filtered as small) still shows.
   std::vector<double> single_apple_radii;
   for (const auto& c : r.clusters)
-    if (c.count == 1 && (c.status == "kept" || c.status == "small")) single_apple_radii.push_back(c.apple_radius_seen);
+    if (!c.edge && c.count == 1 && (c.status == "kept" || c.status == "small"))
+      single_apple_radii.push_back(c.apple_radius_seen);
   CheckAppleSize(std::move(single_apple_radii), clusters.points.apple_radius, o.reconstruction_check, &check);
   CheckFrameSpacing(r.row_distance, o.reconstruction_check, &check);
   for (size_t i = logged; i < check.warnings.size(); ++i) spdlog::warn("reconstruction: {}", check.warnings[i]);
@@ -1117,7 +1119,10 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
     // other rules' (their densest band moved 25-75 cm on 4 of 186 sides).
     ClusterOptions one_side = resolved(*o.one_side_clusters);
     if (one_side.row_distance <= 0) one_side.row_distance = r.row_distance;
-    one_side_result = CountFruitClusters(views, frames, ground, one_side, r.points);
+    // The triangulated points only: the edge apples are found again under these rules.
+    one_side_result = CountFruitClusters(
+        views, frames, ground, one_side,
+        std::vector<FruitPoint>(r.points.begin(), r.points.begin() + r.triangulated_points));
     s.one_side_count = one_side_result->count;
   }
   Json truth_json;
@@ -1188,7 +1193,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
       {"row_distance", r.row_distance},
       {"depth_cutoff", r.depth_cutoff},
       {"depth_cutoff_from", r.depth_cutoff_from_gap ? "gap" : "margin"},
-      {"fruit_points", r.points.size()},
+      {"fruit_points", r.triangulated_points},
       {"clusters", {{"total", r.clusters.size()}, {"kept", s.clusters_kept}, {"removed", removed},
                     {"duplicates_joined", r.duplicates_joined}, {"edge_apples", r.edge_apples}}},
       {"warnings", warnings},

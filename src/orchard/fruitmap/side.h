@@ -191,7 +191,10 @@ struct FruitCluster {
 };
 
 struct ClusterResult {
+  // The triangulated fruit points, then (from triangulated_points on) the
+  // edge apples' points, one per sliver.
   std::vector<FruitPoint> points;
+  int triangulated_points = 0;
   std::vector<int> point_cluster;  // cluster index of each point
   std::vector<FruitCluster> clusters;
   double row_distance = 0;
