@@ -23,18 +23,19 @@ void EdgeAppleOptions::Check() const {
 
 namespace {
 
-// Whether X, projected into `view` (above or beside the image too), lies
-// within an apple's radius at its depth of the blob's box.
-bool ExplainsBlob(const CameraView& view, const Eigen::Vector3d& X, const Blob& blob, double apple_radius,
-                  double across_fraction) {
-  const double z = view.Depth(X);
-  if (z <= 1e-6) return false;
-  Eigen::Vector2d p;
-  view.Project(X, &p);  // the pixel, inside the image or not
-  const double r = view.fx * apple_radius / z;
-  const double dx = std::max({blob.box.x1 - p.x(), 0.0, p.x() - blob.box.x2});
-  const double dy = std::max({blob.box.y1 - p.y(), 0.0, p.y() - blob.box.y2});
-  return dy <= r && dx <= across_fraction * r;
+// A point that may explain slivers, as one frame sees it: its pixel (inside
+// the image or not) and an apple's radius there.
+struct ProjectedPoint {
+  Eigen::Vector2d pixel;
+  double radius = 0;
+};
+
+// Whether the point lies within an apple's radius of the blob's box
+// vertically and within across_fraction of that of its columns.
+bool ExplainsBlob(const ProjectedPoint& p, const Blob& blob, double across_fraction) {
+  const double dx = std::max({blob.box.x1 - p.pixel.x(), 0.0, p.pixel.x() - blob.box.x2});
+  const double dy = std::max({blob.box.y1 - p.pixel.y(), 0.0, p.pixel.y() - blob.box.y2});
+  return dy <= p.radius && dx <= across_fraction * p.radius;
 }
 
 // A sighting's ray in the row's horizontal plane: point and unit direction
@@ -89,16 +90,29 @@ std::vector<EdgeSighting> FindEdgeSightings(const std::vector<CameraView>& views
   std::vector<EdgeSighting> sightings;
   for (size_t f = 0; f < frames.size(); ++f) {
     const CameraView& view = views[f];
-    std::vector<const Blob*> pieces;
+    std::vector<const Blob*> edge_blobs;
     for (const Blob& b : frames[f].blobs) {
       if (b.box.y1 >= o.edge_rows) continue;
       // In a top corner the side edge cuts the sliver too: its middle is not the apple's column.
       if (b.box.x1 < o.edge_rows || b.box.x2 > view.width - o.edge_rows) continue;
-      const bool is_explained = std::any_of(explained.begin(), explained.end(), [&](const Eigen::Vector3d& X) {
-        return ExplainsBlob(view, X, b, o.apple_radius, o.explain_across);
-      });
-      if (!is_explained) pieces.push_back(&b);
+      edge_blobs.push_back(&b);
     }
+    if (edge_blobs.empty()) continue;
+    // The explaining points projected once per frame, not once per blob.
+    std::vector<ProjectedPoint> projected;
+    for (const Eigen::Vector3d& X : explained) {
+      const double z = view.Depth(X);
+      if (z <= 1e-6) continue;
+      ProjectedPoint p;
+      view.Project(X, &p.pixel);  // the pixel, inside the image or not
+      p.radius = view.fx * o.apple_radius / z;
+      projected.push_back(p);
+    }
+    std::vector<const Blob*> pieces;
+    for (const Blob* b : edge_blobs)
+      if (std::none_of(projected.begin(), projected.end(),
+                       [&](const ProjectedPoint& p) { return ExplainsBlob(p, *b, o.explain_across); }))
+        pieces.push_back(b);
     if (pieces.empty()) continue;
     // Pieces of one sliver (leaves cut it) lie within an apple's width.
     const double depth = row.row_distance > 0 ? row.row_distance : 2.0;
@@ -128,6 +142,10 @@ std::vector<EdgeSighting> FindEdgeSightings(const std::vector<CameraView>& views
     }
   }
   return sightings;
+}
+
+Eigen::Vector3d SightingAtDistance(const EdgeSighting& s, const RowFrame& row, double distance) {
+  return s.origin + (distance - row.across.dot(s.origin - row.origin)) / row.across.dot(s.direction) * s.direction;
 }
 
 std::vector<EdgeApple> GroupEdgeSightings(const std::vector<EdgeSighting>& sightings, const RowFrame& row,
@@ -191,8 +209,7 @@ std::vector<EdgeApple> GroupEdgeSightings(const std::vector<EdgeSighting>& sight
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     for (int m : group.members) {
       const EdgeSighting& s = sightings[m];
-      const double t = (a.distance - row.across.dot(s.origin - row.origin)) / row.across.dot(s.direction);
-      a.sighting_points.push_back(s.origin + t * s.direction);
+      a.sighting_points.push_back(SightingAtDistance(s, row, a.distance));
       sum += a.sighting_points.back();
     }
     a.centre = sum / static_cast<double>(group.members.size());

@@ -82,6 +82,9 @@ std::vector<EdgeSighting> FindEdgeSightings(const std::vector<CameraView>& views
                                             const std::vector<Eigen::Vector3d>& explained, const RowFrame& row,
                                             const EdgeAppleOptions& options);
 
+// Where a sighting's ray lies `distance` across the row from the camera path.
+Eigen::Vector3d SightingAtDistance(const EdgeSighting& sighting, const RowFrame& row, double distance);
+
 // One apple seen only at the top edge: its sightings and where it hangs (the
 // top edge's height at the rays' crossing; a lone sighting at the row
 // distance).

@@ -282,10 +282,8 @@ void AddEdgeApples(const std::vector<CameraView>& views, const std::vector<Fruit
       r->points.push_back({X, s.frame, s.blobs[0], static_cast<int>(a.sightings.size())});
       r->point_cluster.push_back(static_cast<int>(r->clusters.size()));
       c.views.push_back({s.frame, s.pixels, 1});
-      const auto at = [&](double distance) {
-        return s.origin + (distance - row.across.dot(s.origin - row.origin)) / row.across.dot(s.direction) * s.direction;
-      };
-      c.edge_rays.emplace_back(at(row.row_distance - o.edge.near_margin), at(row.row_distance + o.edge.far_margin));
+      c.edge_rays.emplace_back(SightingAtDistance(s, row, row.row_distance - o.edge.near_margin),
+                               SightingAtDistance(s, row, row.row_distance + o.edge.far_margin));
       c.edge_columns.push_back(s.column);
       c.view_blobs.push_back(s.blobs);
     }
