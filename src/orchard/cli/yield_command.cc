@@ -70,6 +70,10 @@ void AddYieldCommand(CLI::App& app) {
   cmd->add_option("--intersection-per-residual", o.intersection_per_residual,
                   "Widen the intersection distance to this many times the registration's residual (0 = fixed)")
       ->capture_default_str();
+  cmd->add_option("--sight-link", o.shared.sight_across,
+                  "Link two clusters linked to nothing when one lies within this (m) of the other's lines of sight, "
+                  "behind it: a partly hidden apple seen through a gap in the leaves (0 = off)")
+      ->capture_default_str();
   cmd->add_flag("--no-unlinked-sides-rule{false}", o.unlinked_by_sides_rule,
                 "Count merge clusters linked to nothing on the other side in their largest views, like the linked "
                 "ones, not by their side's own best-views rule");

@@ -644,7 +644,7 @@ cv::Scalar ClusterColour(int id) {
 }
 
 void WriteOutputs(const fs::path& out, const std::vector<fs::path>& image_paths, const std::vector<FruitFrame>& frames,
-                  const ClusterResult& r, const SideOptions& o) {
+                  const std::vector<CameraView>& views, const ClusterResult& r, const SideOptions& o) {
   std::ostringstream csv;
   csv << "id,x,y,z,extent_x,extent_y,extent_z,points,count,status,height,distance,frames,views,votes_won,votes_lost,"
          "apple_radius,count_by_pixels,count_by_count,edge\n";
@@ -674,6 +674,18 @@ void WriteOutputs(const fs::path& out, const std::vector<fs::path>& image_paths,
            << b.z() << '\n';
     }
   WriteTextFileAtomic(out / "edge_rays.csv", rays.str());
+  // Camera centres of the frames used, in the fruit points' frame: the merge
+  // follows a cluster's lines of sight from its count frames (clusters.csv
+  // `frames`) to the other side's clusters.
+  std::ostringstream cams;
+  cams << "frame,x,y,z\n";
+  cams.precision(4);
+  cams << std::fixed;
+  for (size_t i = 0; i < views.size(); ++i) {
+    const Eigen::Vector3d c = views[i].Center();
+    cams << image_paths[i].filename().string() << ',' << c.x() << ',' << c.y() << ',' << c.z() << '\n';
+  }
+  WriteTextFileAtomic(out / "cameras.csv", cams.str());
   std::ostringstream ply;
   ply << "ply\nformat ascii 1.0\nelement vertex " << r.points.size()
       << "\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\nproperty uchar green\n"
@@ -1127,7 +1139,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   if (!in.truth.empty())
     truth_json = ScoreAgainstTruth(in.truth, views, one_side_result ? *one_side_result : r, r, in.out);
   s.clusters_s = stopwatch.Lap();
-  WriteOutputs(in.out, image_paths, frames, r, o);
+  WriteOutputs(in.out, image_paths, frames, views, r, o);
   s.outputs_s = stopwatch.Lap();
   s.count = r.count;
   s.single_frame_sum = r.single_frame_sum;

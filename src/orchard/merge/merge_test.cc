@@ -737,6 +737,49 @@ TEST(SharedCountTest, EdgeApplesLinkAlongTheirSliversRays) {
   EXPECT_THROW(bad.Check(), Error);
 }
 
+TEST(SharedCountTest, ClustersLinkAlongALineOfSightThroughAGapInTheLeaves) {
+  // Front frame: front cameras at y = 0, back cameras at y = 5, 1.5 m up.
+  // The back holds an apple at a (2.8 m across); the front sees it through a
+  // gap in the leaves and its points lie where the gap is, 30 cm nearer
+  // its cameras on their lines of sight to the apple.
+  const Eigen::Vector3d a(0, 2.8, 1.2);
+  const std::vector<Eigen::Vector3d> front_cameras = {{-0.3, 0, 1.5}, {0, 0, 1.5}, {0.3, 0, 1.5}};
+  const Eigen::Vector3d gap = front_cameras[1] + (a - front_cameras[1]) * (2.5 / 2.8);
+  SideCluster seen_through = Cluster(1, 1, {gap});
+  seen_through.view_centres = front_cameras;
+  SideCluster held = Cluster(1, 1, {a});
+  held.view_centres = {{-0.2, 5, 1.5}, {0, 5, 1.5}, {0.2, 5, 1.5}};
+  // Another apple the back alone sees, 15 cm beside: not on those lines.
+  const SideCluster beside = Cluster(2, 1, {a + Eigen::Vector3d(0.15, 0, 0)});
+  const SharedCount s = CountSharedApples({seen_through}, {beside, held}, SharedCountOptions());
+  EXPECT_EQ(s.sight_links, 1);
+  ASSERT_EQ(s.groups.size(), 1u);
+  EXPECT_EQ(s.groups[0].back, std::vector<int>{1});
+  EXPECT_EQ(s.total, 2);
+  // Off: three apples. Without view centres the line of sight is unknown.
+  SharedCountOptions off;
+  off.sight_across = 0;
+  EXPECT_EQ(CountSharedApples({seen_through}, {beside, held}, off).total, 3);
+  SideCluster unknown = seen_through;
+  unknown.view_centres.clear();
+  EXPECT_EQ(CountSharedApples({unknown}, {beside, held}, SharedCountOptions()).sight_links, 0);
+  // A cluster in front of the front's cluster (nearer its cameras) is not
+  // behind it; a cluster already linked to one of the other side is not
+  // linked again along a line of sight.
+  SideCluster nearer = held;
+  nearer.points = {gap - Eigen::Vector3d(0, 0.3, 0)};
+  nearer.view_centres.clear();
+  UpdateClusterExtent(&nearer);
+  EXPECT_EQ(CountSharedApples({seen_through}, {nearer}, SharedCountOptions()).sight_links, 0);
+  const SideCluster twin = Cluster(3, 1, {gap + Eigen::Vector3d(0.02, 0, 0)});
+  const SharedCount linked = CountSharedApples({seen_through}, {twin, held}, SharedCountOptions());
+  EXPECT_EQ(linked.sight_links, 0);
+  EXPECT_EQ(linked.total, 2);  // front + twin share one, held stands alone
+  SharedCountOptions bad;
+  bad.sight_max_behind = 0;
+  EXPECT_THROW(bad.Check(), Error);
+}
+
 TEST(MergeTruthTest, TakesTheMergedCountApart) {
   // Visible: front 0-5, back 3-8 (3, 4, 5 from both sides), 9 apples in all.
   const Eigen::Vector3d a(0, 2.5, 1.5), dx(0.5, 0, 0), e(0.02, 0, 0);
@@ -865,6 +908,24 @@ TEST(SideCloudTest, LoadsEdgeApplesWithTheirRays) {
   ScaleSideCloud(&cloud, 2);
   EXPECT_TRUE(cloud.clusters[1].ray_ends[1].isApprox(Eigen::Vector3d(2, 7, 5.7)));
   EXPECT_EQ(WithoutEdgeApples(cloud).clusters.size(), 1u);
+  // The count frames' camera centres from cameras.csv, in the row frame.
+  WriteTextFileAtomic(dir / "clusters.csv",
+                      "id,x,y,z,extent_x,extent_y,extent_z,points,count,status,height,distance,frames\n"
+                      "1,1,2,1,0,0,0,1,1,kept,1,2,f7.png;f9.png;f8.png\n"
+                      "2,2,2.5,2.6,0,0,0,1,1,kept,2.6,2.5,f3.png\n");
+  WriteTextFileAtomic(dir / "cameras.csv", "frame,x,y,z\nf7.png,1,0,1.5\nf8.png,1.1,0,1.5\nf9.png,1.2,0,1.5\n");
+  cloud = LoadSideCloud(dir, "front");
+  ASSERT_EQ(cloud.clusters[0].view_centres.size(), 3u);
+  EXPECT_TRUE(cloud.clusters[0].view_centres[1].isApprox(Eigen::Vector3d(0.2, 0, 1.5)));
+  EXPECT_TRUE(cloud.clusters[1].view_centres.empty());  // f3.png has no camera
+  WriteTextFileAtomic(dir / "cameras.csv", "frame,x,y,z\nf7.png,1,0\n");
+  try {
+    LoadSideCloud(dir, "front");
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("cameras.csv line 2"), std::string::npos) << e.what();
+  }
+  fs::remove(dir / "cameras.csv");
   // A malformed rays file is an error naming it.
   WriteTextFileAtomic(dir / "edge_rays.csv", "cluster,frame\n2,f7.png,1\n");
   try {

@@ -330,6 +330,7 @@ Levelling LevelOnSparseGround(SideCloud* side, const RowRegistrationOptions& o, 
     for (auto& c : *clusters) {
       for (auto& p : c.points) p = move(p);
       for (auto& p : c.ray_ends) p = move(p);
+      for (auto& p : c.view_centres) p = move(p);
       UpdateClusterExtent(&c);
     }
   l.transform.linear() = l.scale * rot;

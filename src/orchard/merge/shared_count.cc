@@ -1,8 +1,11 @@
 #include "orchard/merge/shared_count.h"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <map>
 #include <numeric>
+#include <tuple>
 
 #include "orchard/core/error.h"
 
@@ -13,6 +16,9 @@ void SharedCountOptions::Check() const {
                        intersection_distance);
   ORCHARD_CHECK_OPTION(edge_across > 0 && edge_below >= 0 && edge_above > 0,
                        "edge link distances must be positive, got ", edge_across, ", ", edge_below, ", ", edge_above);
+  ORCHARD_CHECK_OPTION(sight_across >= 0 && sight_min_behind >= 0 && sight_max_behind > sight_min_behind,
+                       "line-of-sight link: need sight_across >= 0 and 0 <= sight_min_behind < sight_max_behind, got ",
+                       sight_across, ", ", sight_min_behind, ", ", sight_max_behind);
 }
 
 namespace {
@@ -74,6 +80,24 @@ bool EdgeLinks(const SideCluster& edge, const SideCluster& other, const SharedCo
   return false;
 }
 
+// How far (m) `behind`'s centre lies from the farthest of the lines of sight
+// from `seen`'s view centres through its centre, when it lies within the
+// depth window beyond it on all of them; infinity otherwise.
+double SightOffset(const SideCluster& seen, const SideCluster& behind, const SharedCountOptions& o) {
+  const double none = std::numeric_limits<double>::infinity();
+  if (seen.view_centres.empty()) return none;
+  double worst = 0;
+  const Eigen::Vector3d v = behind.centre - seen.centre;
+  for (const auto& c : seen.view_centres) {
+    const Eigen::Vector3d ray = seen.centre - c;
+    if (ray.norm() <= 0) return none;
+    const double t = v.dot(ray.normalized());
+    if (t < o.sight_min_behind || t > o.sight_max_behind) return none;
+    worst = std::max(worst, std::sqrt(std::max(0.0, v.squaredNorm() - t * t)));
+  }
+  return worst <= o.sight_across ? worst : none;
+}
+
 int Find(std::vector<int>& parent, int i) {
   while (parent[i] != i) i = parent[i] = parent[parent[i]];
   return i;
@@ -119,6 +143,38 @@ SharedCount CountSharedApples(const std::vector<SideCluster>& front, const std::
     }
   for (const auto& [f, b] : edge_pairs)
     if (r.front_edge_on[f] < 0 && r.back_edge_on[b] < 0) parent[Find(parent, f)] = Find(parent, nf + b);
+  if (o.sight_across > 0) {
+    // Clusters linked to nothing (no group, no edge apple on them), paired
+    // along lines of sight, closest first, each at most once.
+    std::vector<int> members(nf + nb, 0);
+    for (int i = 0; i < nf + nb; ++i) ++members[Find(parent, i)];
+    std::vector<bool> alone(nf + nb);
+    for (int i = 0; i < nf + nb; ++i)
+      alone[i] = members[Find(parent, i)] == 1 && !(i < nf ? front[i] : back[i - nf]).edge;
+    for (int f = 0; f < nf; ++f)
+      if (r.front_edge_on[f] >= 0) alone[nf + r.front_edge_on[f]] = false;
+    for (int b = 0; b < nb; ++b)
+      if (r.back_edge_on[b] >= 0) alone[r.back_edge_on[b]] = false;
+    std::vector<std::tuple<double, int, int>> pairs;
+    for (int f = 0; f < nf; ++f) {
+      if (!alone[f]) continue;
+      for (int b = 0; b < nb; ++b) {
+        if (!alone[nf + b]) continue;
+        const double offset = std::min(SightOffset(front[f], back[b], o), SightOffset(back[b], front[f], o));
+        if (std::isfinite(offset)) pairs.emplace_back(offset, f, b);
+      }
+    }
+    std::sort(pairs.begin(), pairs.end());
+    for (const auto& [offset, f, b] : pairs) {
+      if (!alone[f] || !alone[nf + b]) continue;
+      alone[f] = alone[nf + b] = false;
+      SharedLink link{f, b};
+      link.sight = true;
+      r.links.push_back(link);
+      parent[Find(parent, f)] = Find(parent, nf + b);
+      ++r.sight_links;
+    }
+  }
   std::map<int, SharedGroup> groups;
   for (int i = 0; i < nf + nb; ++i) {
     SharedGroup& g = groups[Find(parent, i)];

@@ -31,6 +31,7 @@ void ScaleSideCloud(SideCloud* side, double scale) {
     for (auto& c : *clusters) {
       for (auto& p : c.points) p *= scale;
       for (auto& p : c.ray_ends) p *= scale;
+      for (auto& p : c.view_centres) p *= scale;
       UpdateClusterExtent(&c);
     }
 }
@@ -91,6 +92,7 @@ SideCloud LoadSideCloud(const fs::path& dir, const std::string& name, const std:
   }
   // Kept and fallen clusters and their counts.
   std::map<int, SideCluster*> index;  // cluster id -> its place in cloud.clusters or cloud.fallen
+  std::map<int, std::string> count_frames;  // cluster id -> its `frames` (names separated by ';')
   {
     std::istringstream csv(ReadTextFile(csv_path));
     std::string line;
@@ -118,6 +120,7 @@ SideCloud LoadSideCloud(const fs::path& dir, const std::string& name, const std:
         c.count = std::stoi(f[8]);
         c.count_unlinked = std::stoi(f[unlinked_col]);
         c.edge = edge_col > 0 && edge_col < f.size() && f[edge_col] == "1";
+        if (f.size() > 12) count_frames[c.id] = f[12];
       } catch (const std::exception&) {
         Fail(name, " side: ", csv_path.string(), " line ", row, ": bad id or count");
       }
@@ -174,6 +177,33 @@ SideCloud LoadSideCloud(const fs::path& dir, const std::string& name, const std:
       if (it == index.end() || !it->second->edge) continue;
       it->second->ray_ends.push_back(cloud.to_row * a);
       it->second->ray_ends.push_back(cloud.to_row * b);
+    }
+  }
+  // The count frames' camera centres.
+  const fs::path cameras_path = dir / "cameras.csv";
+  if (fs::is_regular_file(cameras_path)) {
+    std::map<std::string, Eigen::Vector3d> centre_of;
+    std::istringstream csv(ReadTextFile(cameras_path));
+    std::string line;
+    std::getline(csv, line);
+    int row = 1;
+    while (std::getline(csv, line)) {
+      ++row;
+      const std::vector<std::string> f = SplitCsvLine(line);
+      try {
+        if (f.size() != 4) throw std::invalid_argument("fields");
+        centre_of[f[0]] = cloud.to_row * Eigen::Vector3d(std::stod(f[1]), std::stod(f[2]), std::stod(f[3]));
+      } catch (const std::exception&) {
+        Fail(name, " side: ", cameras_path.string(), " line ", row, " is not 'frame,x,y,z'");
+      }
+    }
+    for (const auto& [id, names] : count_frames) {
+      std::istringstream list(names);
+      std::string frame;
+      while (std::getline(list, frame, ';')) {
+        const auto it = centre_of.find(frame);
+        if (it != centre_of.end()) index.at(id)->view_centres.push_back(it->second);
+      }
     }
   }
   // Sparse points (COLMAP text: "id x y z r g b error track..."); the side

@@ -30,6 +30,10 @@ struct SideCluster {
   // pairs here, moved with the points), and registrations leave it out.
   bool edge = false;
   std::vector<Eigen::Vector3d> ray_ends;
+  // Camera centres of the frames its count came from (clusters.csv `frames`,
+  // cameras.csv; empty for sides written before cameras.csv), moved with the
+  // points: the merge follows its lines of sight through its centre.
+  std::vector<Eigen::Vector3d> view_centres;
 };
 
 struct SideCloud {
@@ -73,7 +77,7 @@ Eigen::Isometry3d RowFrameTransform(const Eigen::Vector3d& origin, const Eigen::
 // Reads side.json (row_frame, count), clusters.csv (kept and fallen clusters,
 // their counts; count_unlinked from the column `unlinked_count_column`, e.g.
 // "count_by_count"), fruit.ply (points with cluster ids) and, when present,
-// edge_rays.csv (an edge apple's rays),
+// edge_rays.csv (an edge apple's rays), cameras.csv (the view centres),
 // sparse/points3D.txt and images.txt of `side_dir`. Throws orchard::Error naming the file
 // when one is missing or malformed.
 SideCloud LoadSideCloud(const fs::path& side_dir, const std::string& name,

@@ -401,11 +401,15 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
   for (auto& c : back_in_front) {
     for (auto& p : c.points) p = y.registration.back_to_front * p;
     for (auto& p : c.ray_ends) p = y.registration.back_to_front * p;
+    for (auto& p : c.view_centres) p = y.registration.back_to_front * p;
     UpdateClusterExtent(&c);
   }
   SharedCountOptions shared_options = o.shared;
   shared_options.intersection_distance = IntersectionDistance(o, y.registration);
   const SharedCount shared = CountSharedApples(front_cloud.clusters, back_in_front, shared_options);
+  if (shared.sight_links > 0)
+    spdlog::info("clusters linked along a line of sight (an apple seen through a gap in the leaves): {}",
+                 shared.sight_links);
   // From here on each cluster's count is the one the merge used.
   for (auto [clusters, counts] : {std::pair{&front_cloud.clusters, &shared.front_counts}, {&back_in_front, &shared.back_counts}})
     for (size_t i = 0; i < clusters->size(); ++i) {
@@ -497,6 +501,7 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
                  {"back_clusters", y.merge_back},
                  {"shared", std::round(y.merge_shared * 10) / 10},
                  {"unlinked_added", y.unlinked_added},
+                 {"sight_links", shared.sight_links},
                  {"note", "total = front_clusters + back_clusters - shared: the sides' clusters kept for the merge "
                           "(" + std::to_string(o.side.clusters.min_points) +
                               " fruit points, ghosts removed) and the apples the inclusion-exclusion counted once; "
@@ -542,6 +547,7 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
       {"intersection_distance_m", shared_options.intersection_distance},
       {"intersection_floor_m", o.shared.intersection_distance},
       {"intersection_per_residual", o.intersection_per_residual},
+      {"sight_link_m", o.shared.sight_across},
   };
   if (!in.calibration.empty()) {
     y.calibration_factor = calibration.factor;
