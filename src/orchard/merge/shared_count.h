@@ -40,9 +40,9 @@ struct SharedCountOptions {
   // within sight_across (m) of every line of sight from the camera of one's
   // count frames through its centre, from sight_min_behind to
   // sight_max_behind (m) beyond it. On 22 rows with exact masks and true
-  // poses (seeds 505-510, 517-524, 601-608): 5 cm linked 14 pairs holding one
-  // apple and 1 pair of two; the wrong pairs lay 3.1-5.9 cm off, the right
-  // ones 1.1-4.6 cm (docs/yield.md). 0 = off.
+  // poses (seeds 505-510, 517-524, 601-608) the pairs that held one apple
+  // lay 1.1-4.6 cm off, the others mostly 5-6 cm; at 5 cm 15 of 17 links
+  // joined the two sides' clusters of one apple (docs/yield.md). 0 = off.
   double sight_across = 0.05;
   double sight_min_behind = 0.04;
   double sight_max_behind = 0.7;

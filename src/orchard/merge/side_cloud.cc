@@ -64,6 +64,19 @@ Eigen::Isometry3d RowFrameTransform(const Eigen::Vector3d& origin, const Eigen::
 
 namespace {
 
+// Calls row_fn(fields, line number) for each line after the header of a CSV
+// file; false (and no call) when there is no such file.
+template <typename RowFn>
+bool ForEachCsvRow(const fs::path& path, RowFn&& row_fn) {
+  if (!fs::is_regular_file(path)) return false;
+  std::istringstream csv(ReadTextFile(path));
+  std::string line;
+  std::getline(csv, line);
+  int row = 1;
+  while (std::getline(csv, line)) row_fn(SplitCsvLine(line), ++row);
+  return true;
+}
+
 Eigen::Vector3d Vec3(const nlohmann::json& j) {
   const auto v = j.get<std::vector<double>>();
   if (v.size() != 3) Fail("expected three numbers, got ", v.size());
@@ -154,56 +167,40 @@ SideCloud LoadSideCloud(const fs::path& dir, const std::string& name, const std:
   }
   // Edge apples' rays.
   const fs::path rays_path = dir / "edge_rays.csv";
-  if (fs::is_regular_file(rays_path)) {
-    std::istringstream csv(ReadTextFile(rays_path));
-    std::string line;
-    std::getline(csv, line);
-    int row = 1;
-    while (std::getline(csv, line)) {
-      ++row;
-      const std::vector<std::string> f = SplitCsvLine(line);
-      Eigen::Vector3d a, b;
-      int id = 0;
-      try {
-        if (f.size() != 10) throw std::invalid_argument("fields");
-        id = std::stoi(f[0]);
-        a = {std::stod(f[4]), std::stod(f[5]), std::stod(f[6])};
-        b = {std::stod(f[7]), std::stod(f[8]), std::stod(f[9])};
-      } catch (const std::exception&) {
-        Fail(name, " side: ", rays_path.string(), " line ", row,
-             " is not 'cluster,frame,column,pixels,near x,y,z,far x,y,z'");
-      }
-      const auto it = index.find(id);
-      if (it == index.end() || !it->second->edge) continue;
-      it->second->ray_ends.push_back(cloud.to_row * a);
-      it->second->ray_ends.push_back(cloud.to_row * b);
+  ForEachCsvRow(rays_path, [&](const std::vector<std::string>& f, int row) {
+    Eigen::Vector3d a, b;
+    int id = 0;
+    try {
+      if (f.size() != 10) throw std::invalid_argument("fields");
+      id = std::stoi(f[0]);
+      a = {std::stod(f[4]), std::stod(f[5]), std::stod(f[6])};
+      b = {std::stod(f[7]), std::stod(f[8]), std::stod(f[9])};
+    } catch (const std::exception&) {
+      Fail(name, " side: ", rays_path.string(), " line ", row,
+           " is not 'cluster,frame,column,pixels,near x,y,z,far x,y,z'");
     }
-  }
+    const auto it = index.find(id);
+    if (it == index.end() || !it->second->edge) return;
+    it->second->ray_ends.push_back(cloud.to_row * a);
+    it->second->ray_ends.push_back(cloud.to_row * b);
+  });
   // The count frames' camera centres.
   const fs::path cameras_path = dir / "cameras.csv";
-  if (fs::is_regular_file(cameras_path)) {
-    std::map<std::string, Eigen::Vector3d> centre_of;
-    std::istringstream csv(ReadTextFile(cameras_path));
-    std::string line;
-    std::getline(csv, line);
-    int row = 1;
-    while (std::getline(csv, line)) {
-      ++row;
-      const std::vector<std::string> f = SplitCsvLine(line);
-      try {
-        if (f.size() != 4) throw std::invalid_argument("fields");
-        centre_of[f[0]] = cloud.to_row * Eigen::Vector3d(std::stod(f[1]), std::stod(f[2]), std::stod(f[3]));
-      } catch (const std::exception&) {
-        Fail(name, " side: ", cameras_path.string(), " line ", row, " is not 'frame,x,y,z'");
-      }
+  std::map<std::string, Eigen::Vector3d> centre_of;
+  ForEachCsvRow(cameras_path, [&](const std::vector<std::string>& f, int row) {
+    try {
+      if (f.size() != 4) throw std::invalid_argument("fields");
+      centre_of[f[0]] = cloud.to_row * Eigen::Vector3d(std::stod(f[1]), std::stod(f[2]), std::stod(f[3]));
+    } catch (const std::exception&) {
+      Fail(name, " side: ", cameras_path.string(), " line ", row, " is not 'frame,x,y,z'");
     }
-    for (const auto& [id, names] : count_frames) {
-      std::istringstream list(names);
-      std::string frame;
-      while (std::getline(list, frame, ';')) {
-        const auto it = centre_of.find(frame);
-        if (it != centre_of.end()) index.at(id)->view_centres.push_back(it->second);
-      }
+  });
+  for (const auto& [id, names] : count_frames) {
+    std::istringstream list(names);
+    std::string frame;
+    while (std::getline(list, frame, ';')) {
+      const auto it = centre_of.find(frame);
+      if (it != centre_of.end()) index.at(id)->view_centres.push_back(it->second);
     }
   }
   // Sparse points (COLMAP text: "id x y z r g b error track..."); the side
