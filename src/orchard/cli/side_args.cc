@@ -111,6 +111,9 @@ void AddSideOptions(CLI::App* cmd, SideOptions* options) {
                    "Count a cluster in its views with the most fruit pixels (the study's rule) or the highest counts; "
                    "auto (default): counts when blobs are counted one apple each (instance masks, boxes), else pixels")
       ->transform(CLI::CheckedTransformer(best_views, CLI::ignore_case));
+  cmd->add_option("--best-views", o.clusters.best_views,
+                  "A cluster's count is the median of its counts in this many best views (the study's 3)")
+      ->capture_default_str();
   cmd->add_flag("--vote-near-first,!--vote-under-first", o.clusters.vote_near_first,
                 "A point votes for the blob whose centre is near before the blob under it (default), or the reverse");
   cmd->add_option("--fallen-height", o.clusters.fallen_height, "Clusters lower than this (m) are fallen apples")
