@@ -67,6 +67,20 @@ TEST_F(SideTest, CountsTheVisibleApplesOnceFromTruePosesAndMasks) {
   EXPECT_NEAR(s.count, visible, 0.2 * visible) << "visible_front " << visible;
   EXPECT_GT(s.single_frame_sum, 2 * s.count);
   for (const char* f : {"side.json", "clusters.csv", "fruit.ply"}) EXPECT_TRUE(fs::exists(*dir_ / "out" / f)) << f;
+  // cameras.csv: every used frame's camera centre, here the generator's
+  // path 1.5 m above the ground.
+  {
+    std::istringstream cameras(ReadTextFile(*dir_ / "out/cameras.csv"));
+    std::string line;
+    std::getline(cameras, line);
+    EXPECT_EQ(line, "frame,x,y,z");
+    int rows = 0;
+    while (std::getline(cameras, line)) {
+      ++rows;
+      EXPECT_NEAR(std::stod(line.substr(line.rfind(',') + 1)), 1.5, 0.05) << line;
+    }
+    EXPECT_EQ(rows, s.frames_used);
+  }
   const auto side = nlohmann::json::parse(ReadTextFile(*dir_ / "out/side.json"));
   EXPECT_EQ(side.at("count").get<int>(), s.count);
   EXPECT_EQ(side.at("scale").get<double>(), 1.0);  // true poses are metric
