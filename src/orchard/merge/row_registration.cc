@@ -327,12 +327,7 @@ Levelling LevelOnSparseGround(SideCloud* side, const RowRegistrationOptions& o, 
   for (auto& p : side->sparse) p = move(p);
   for (auto& p : side->cameras) p = move(p);
   for (auto* clusters : {&side->clusters, &side->fallen})
-    for (auto& c : *clusters) {
-      for (auto& p : c.points) p = move(p);
-      for (auto& p : c.ray_ends) p = move(p);
-      for (auto& p : c.view_centres) p = move(p);
-      UpdateClusterExtent(&c);
-    }
+    for (auto& c : *clusters) MoveCluster(&c, move);
   l.transform.linear() = l.scale * rot;
   l.transform.translation() = -l.scale * rot * origin;
   l.changed = true;

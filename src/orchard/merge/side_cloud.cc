@@ -1,10 +1,10 @@
 #include "orchard/merge/side_cloud.h"
 
 #include <algorithm>
-#include <stdexcept>
 #include <fstream>
 #include <map>
 #include <sstream>
+#include <stdexcept>
 
 #include <nlohmann/json.hpp>
 
@@ -28,12 +28,7 @@ void ScaleSideCloud(SideCloud* side, double scale) {
   for (auto& p : side->sparse) p *= scale;
   for (auto& p : side->cameras) p *= scale;
   for (auto* clusters : {&side->clusters, &side->fallen})
-    for (auto& c : *clusters) {
-      for (auto& p : c.points) p *= scale;
-      for (auto& p : c.ray_ends) p *= scale;
-      for (auto& p : c.view_centres) p *= scale;
-      UpdateClusterExtent(&c);
-    }
+    for (auto& c : *clusters) MoveCluster(&c, [scale](const Eigen::Vector3d& p) -> Eigen::Vector3d { return p * scale; });
 }
 
 SideCloud WithFallenLandmarks(const SideCloud& side) {

@@ -58,6 +58,16 @@ struct SideCloud {
 // Fills centre, min and max from the points.
 void UpdateClusterExtent(SideCluster* cluster);
 
+// Moves all of a cluster's geometry (points, edge rays, view centres) by
+// `move` (point -> point) and updates its extent: every transform of a side
+// goes through here, so no part of a cluster is left in the old frame.
+template <typename Move>
+void MoveCluster(SideCluster* cluster, const Move& move) {
+  for (auto* points : {&cluster->points, &cluster->ray_ends, &cluster->view_centres})
+    for (auto& p : *points) p = move(p);
+  UpdateClusterExtent(cluster);
+}
+
 // Scales the side's clusters (kept and fallen), sparse points and cameras
 // about its row frame's origin (on the ground under the camera path).
 void ScaleSideCloud(SideCloud* side, double scale);

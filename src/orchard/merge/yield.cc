@@ -398,12 +398,8 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
   // 4: shared apples once, outputs.
   spdlog::info("[yield 4/4] counting shared apples once, writing outputs");
   std::vector<SideCluster> back_in_front = back_cloud.clusters;
-  for (auto& c : back_in_front) {
-    for (auto& p : c.points) p = y.registration.back_to_front * p;
-    for (auto& p : c.ray_ends) p = y.registration.back_to_front * p;
-    for (auto& p : c.view_centres) p = y.registration.back_to_front * p;
-    UpdateClusterExtent(&c);
-  }
+  for (auto& c : back_in_front)
+    MoveCluster(&c, [&](const Eigen::Vector3d& p) -> Eigen::Vector3d { return y.registration.back_to_front * p; });
   SharedCountOptions shared_options = o.shared;
   shared_options.intersection_distance = IntersectionDistance(o, y.registration);
   const SharedCount shared = CountSharedApples(front_cloud.clusters, back_in_front, shared_options);
