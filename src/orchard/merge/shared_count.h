@@ -34,7 +34,7 @@ struct SharedCountOptions {
   double edge_above = 0.08;
   // A cluster linked to nothing may show a partly hidden apple through a gap
   // in the leaves: its fruit points then lie where the gap is, in front of
-  // the apple (the blob moves with the leaves), 10-60 cm nearer its own
+  // the apple (the blob moves with the leaves), up to 70 cm nearer its own
   // camera than the other side's cluster of the same apple. Two such
   // clusters are linked (one to one, best first) when the other's centre lies
   // within sight_across (m) of every line of sight from the camera of one's
