@@ -7,6 +7,7 @@
 #include "orchard/cli/commands.h"
 #include "orchard/cli/dataset_subset.h"
 #include "orchard/core/error.h"
+#include "orchard/data/blob_patches.h"
 #include "orchard/data/count_patches.h"
 #include "orchard/data/dataset.h"
 #include "orchard/nn/counter_ensemble.h"
@@ -238,14 +239,18 @@ void AddTrainNetworkCommands(CLI::App& app) {
 
 void AddPatchesCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
-      "patches", "Counting patches from box annotations: touching boxes form a cluster labelled with its box count");
+      "patches",
+      "Counting patches: from box annotations (touching boxes form a cluster labelled with its box count), or from "
+      "a detector's blobs labelled by true instance masks (--detections)");
   struct Args {
-    std::string data, out;
+    std::string data, out, detections, images, masks, prefix;
+    int every = 1;
     SubsetArgs subset;
     CountPatchOptions options;
+    BlobPatchOptions blob_options;
   };
   auto a = std::make_shared<Args>();
-  cmd->add_option("--data", a->data, "Box-annotated dataset (YOLO folder, COCO json, MinneApple folder)")->required();
+  cmd->add_option("--data", a->data, "Box-annotated dataset (YOLO folder, COCO json, MinneApple folder)");
   cmd->add_option("--out", a->out, "Output folder: images/*.png and counts.csv")->required();
   a->subset.AddOptions(cmd, "all");
   cmd->add_option("--margin", a->options.margin, "Margin around a cluster, fraction of its longer side")
@@ -253,17 +258,46 @@ void AddPatchesCommand(CLI::App& app) {
   cmd->add_option("--background", a->options.background_per_image, "Background patches (count 0) per image")
       ->capture_default_str();
   cmd->add_option("--seed", a->options.seed, "Seed of background placement")->capture_default_str();
+  cmd->add_option("--detections", a->detections,
+                  "Instead of --data: a folder of blob label masks (<frame>.png, e.g. a side's detections/ cache); "
+                  "each blob's box is a patch, counted from --masks");
+  cmd->add_option("--images", a->images, "With --detections: the frames (<frame>.png/.jpg)");
+  cmd->add_option("--masks", a->masks, "With --detections: the frames' instance masks (apple id + 1 per pixel, "
+                                       "as orchard synth writes them)");
+  cmd->add_option("--every", a->every, "With --detections: every n-th frame")->capture_default_str();
+  cmd->add_option("--prefix", a->prefix, "With --detections: prefix of the patch names (e.g. the row and side)");
+  cmd->add_option("--min-apple-pixels", a->blob_options.min_apple_pixels,
+                  "With --detections: apples with fewer visible pixels are not counted")
+      ->capture_default_str();
+  cmd->add_option("--min-share", a->blob_options.min_share,
+                  "With --detections: an apple counts in the blob holding at least this share of its visible pixels")
+      ->capture_default_str();
   cmd->callback([a]() {
+    auto summarise = [](const std::vector<int>& histogram) {
+      std::string summary;
+      for (size_t k = 0; k < histogram.size(); ++k) summary += " " + std::to_string(k) + ":" + std::to_string(histogram[k]);
+      return summary;
+    };
+    if (!a->detections.empty()) {
+      if (!a->data.empty()) Fail("give --data or --detections, not both");
+      if (a->images.empty() || a->masks.empty()) Fail("--detections needs --images and --masks");
+      std::vector<ImageCount> counts;
+      const std::vector<int> histogram =
+          CutBlobPatches(a->detections, a->images, a->masks, a->out, a->prefix, a->every, a->blob_options, &counts);
+      if (counts.empty()) Fail("no blobs in the detections of ", a->detections);
+      WriteCodaLabCounts(counts, fs::path(a->out) / "counts.csv");
+      spdlog::info("{} blobs -> {} (count:patches{})", counts.size(), a->out, summarise(histogram));
+      return;
+    }
+    if (a->data.empty()) Fail("give --data (box annotations) or --detections (blobs and instance masks)");
     const Dataset dataset = a->subset.Select(ReadDataset(a->data));
     const std::vector<CountPatch> patches = MakeCountPatches(dataset, a->options);
     if (patches.empty()) Fail("no patches: the dataset has no clusters of 1..", a->options.max_count, " boxes");
     WriteCountPatches(dataset, patches, a->out);
     std::vector<int> histogram(a->options.max_count + 1, 0);
     for (const CountPatch& p : patches) ++histogram[p.count];
-    std::string summary;
-    for (size_t k = 0; k < histogram.size(); ++k) summary += " " + std::to_string(k) + ":" + std::to_string(histogram[k]);
     spdlog::info("{} images -> {} patches in {} (count:patches{})", dataset.images.size(), patches.size(), a->out,
-                 summary);
+                 summarise(histogram));
   });
 }
 
