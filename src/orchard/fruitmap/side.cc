@@ -596,21 +596,37 @@ class MaskFinder {
   std::map<std::string, fs::path> by_padded_stem_;  // the first in natural order
 };
 
+// Counts a frame's blobs and caches its detection and counts.
+FruitFrame CountAndCache(const SideInputs& in, const cv::Mat& image, FruitFrame frame, const fs::path& cache_dir,
+                         const std::string& stem) {
+  CountBlobs(image, in.counter, &frame);
+  cv::Mat1w ids;
+  frame.labels.convertTo(ids, CV_16U);
+  WriteImageAtomic(cache_dir / (stem + ".png"), ids);
+  WriteTextFileAtomic(cache_dir / (stem + ".json"), Json{{"detector", in.detector_name}, {"counter", in.counter_name},
+                                                         {"counts", frame.counts}}.dump() + "\n");
+  return frame;
+}
+
 // Detections and counts of one frame, from the cache when it was made by the
-// same detector and counter; `masks` finds the instance masks without a detector.
+// same detector and counter (recounted when only the counter differs); `masks`
+// finds the instance masks without a detector.
 FruitFrame FrameFruit(const SideInputs& in, const fs::path& image_path, const fs::path& cache_dir,
                       MaskFinder* masks) {
   const std::string stem = image_path.stem().string();
   const fs::path cache_png = cache_dir / (stem + ".png"), cache_json = cache_dir / (stem + ".json");
   if (fs::exists(cache_png) && fs::exists(cache_json)) {
     const Json j = Json::parse(ReadTextFile(cache_json), nullptr, false);
-    if (!j.is_discarded() && j.value("detector", "") == in.detector_name && j.value("counter", "") == in.counter_name) {
+    if (!j.is_discarded() && j.value("detector", "") == in.detector_name) {
       FruitFrame frame = FruitFromInstanceMask(ReadImage(cache_png, cv::IMREAD_UNCHANGED));
-      const auto counts = j.at("counts").get<std::vector<int>>();
-      if (counts.size() == frame.blobs.size()) {
+      const auto counts = j.value("counts", std::vector<int>());
+      if (j.value("counter", "") == in.counter_name && counts.size() == frame.blobs.size()) {
         frame.counts = counts;
         return frame;
       }
+      // Same detector, another counter: its blobs are counted again, not
+      // detected again (detection is most of a side's time).
+      if (j.value("counter", "") != in.counter_name) return CountAndCache(in, ReadImage(image_path), frame, cache_dir, stem);
     }
   }
   const cv::Mat image = ReadImage(image_path);
@@ -626,13 +642,7 @@ FruitFrame FrameFruit(const SideInputs& in, const fs::path& image_path, const fs
       Fail("instance mask ", mask_path.string(), " must be one channel of the frame's size");
     frame = FruitFromInstanceMask(mask);
   }
-  CountBlobs(image, in.counter, &frame);
-  cv::Mat1w ids;
-  frame.labels.convertTo(ids, CV_16U);
-  WriteImageAtomic(cache_png, ids);
-  WriteTextFileAtomic(cache_json, Json{{"detector", in.detector_name}, {"counter", in.counter_name},
-                                       {"counts", frame.counts}}.dump() + "\n");
-  return frame;
+  return CountAndCache(in, image, std::move(frame), cache_dir, stem);
 }
 
 cv::Scalar ClusterColour(int id) {

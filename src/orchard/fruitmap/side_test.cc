@@ -145,6 +145,23 @@ TEST_F(SideTest, CountsTheVisibleApplesOnceFromTruePosesAndMasks) {
                                    t.at("not_visible").get<int>() - t.at("missed").get<int>());
   scored.truth = *dir_ / "synth/nowhere";  // not a side of the generator's row
   EXPECT_THROW(RunSide(scored, o), Error);
+  // Another counter on the same detections recounts the cached blobs without
+  // detecting again (an empty masks folder to detect from) and caches its counts.
+  struct TwoPerBlob : Counter {
+    BlobCount Count(const cv::Mat&, const cv::Mat1b&) override { return BlobCount{2, {}}; }
+  } two;
+  SideInputs recounted = Inputs("out");
+  recounted.masks = *dir_ / "synth/empty_masks";
+  fs::create_directories(recounted.masks);
+  recounted.counter = &two;
+  recounted.counter_name = "two";
+  EXPECT_GT(RunSide(recounted, o).count, s.count);
+  const auto cached = nlohmann::json::parse(ReadTextFile(*dir_ / "out/detections/frame_0000.json"));
+  EXPECT_EQ(cached.at("counter").get<std::string>(), "two");
+  for (int c : cached.at("counts").get<std::vector<int>>()) EXPECT_EQ(c, 2);
+  // Another detector detects again: here from masks that are not there.
+  recounted.detector_name = "masks2";
+  EXPECT_THROW(RunSide(recounted, o), Error);
 }
 
 TEST_F(SideTest, WarnsWhenApplesShowTheScaleIsWrong) {
