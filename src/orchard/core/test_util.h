@@ -3,11 +3,16 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <system_error>
 #include <vector>
 
 #include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include "orchard/core/error.h"
 
 namespace orchard::test {
 
@@ -36,6 +41,16 @@ inline std::filesystem::path FreshTempDir(const std::string& name) {
   std::filesystem::create_directories(dir);
   TempDirsToRemoveAtExit().push_back(dir);
   return dir;
+}
+
+// `f` throws an orchard::Error whose message contains `needle`.
+inline void ExpectErrorContains(const std::function<void()>& f, const std::string& needle) {
+  try {
+    f();
+    ADD_FAILURE() << "no error; expected one containing '" << needle << "'";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace orchard::test

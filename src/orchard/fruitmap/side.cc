@@ -626,7 +626,7 @@ FruitFrame FrameFruit(const SideInputs& in, const fs::path& image_path, const fs
       }
       // Same detector, another counter: its blobs are counted again, not
       // detected again (detection is most of a side's time).
-      if (j.value("counter", "") != in.counter_name) return CountAndCache(in, ReadImage(image_path), frame, cache_dir, stem);
+      if (j.value("counter", "") != in.counter_name) return CountAndCache(in, ReadImage(image_path), std::move(frame), cache_dir, stem);
     }
   }
   const cv::Mat image = ReadImage(image_path);

@@ -100,14 +100,7 @@ TEST(ColmapModel, RoundTripIsExact) {
   EXPECT_EQ(ReadTextFile(out / "images.txt"), ColmapImagesText(again.images));
 }
 
-void ExpectErrorContains(const std::function<void()>& f, const std::string& needle) {
-  try {
-    f();
-    ADD_FAILURE() << "no error; expected one containing '" << needle << "'";
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
-  }
-}
+using test::ExpectErrorContains;
 
 TEST(ColmapModel, MalformedInputGivesClearErrors) {
   const fs::path dir = TempDir("bad");
