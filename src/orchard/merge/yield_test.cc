@@ -124,7 +124,9 @@ TEST_F(YieldTest, MergesBothSidesAndResumes) {
   const auto& trunks = j.at("alignment").at("trunks");
   EXPECT_EQ(trunks.at("front").get<int>(), 2);
   EXPECT_GE(trunks.at("back").get<int>(), 1);
-  if (trunks.contains("across_m")) EXPECT_NEAR(trunks.at("across_m").get<double>(), 5.0, 0.1);
+  if (trunks.contains("across_m")) {
+    EXPECT_NEAR(trunks.at("across_m").get<double>(), 5.0, 0.1);
+  }
   ASSERT_EQ(j.at("per_tree").size(), 2u);
   EXPECT_NEAR(j.at("per_tree")[1].at("along_m").get<double>() - j.at("per_tree")[0].at("along_m").get<double>(), 1.25,
               0.1);
