@@ -85,7 +85,8 @@ void AddSideOptions(CLI::App* cmd, SideOptions* options) {
                   "Remove clusters whose points land mostly on blobs other clusters win (1 = keep all)")
       ->capture_default_str();
   cmd->add_option("--min-apple-fraction", o.clusters.min_apple_fraction,
-                  "Remove clusters whose largest blob shows less than this fraction of --apple-radius (0 = keep all)")
+                  "Remove clusters whose largest blob shows less than this fraction of --apple-radius (0 = keep all; "
+                  "-1 = auto: 0.6 for instance masks, 0.5 for a detector's blobs)")
       ->capture_default_str();
   cmd->add_option("--merge-shared", o.clusters.merge_shared_fraction,
                   "Join a cluster to a larger one when at least this fraction of its votes fall on blobs both vote "

@@ -116,6 +116,20 @@ TEST(ResolvedBestViews, CountsWhenBlobsAreCountedOneApplePixelsOtherwise) {
   EXPECT_EQ(ResolvedBestViews(o, counted), ClusterOptions::BestViews::kCount);
 }
 
+TEST(ResolvedMinAppleFraction, LargerForInstanceMasksThanForADetectorsBlobs) {
+  SideInputs masks;  // no detector: each blob is one apple's visible part
+  ClusterOptions o;
+  EXPECT_DOUBLE_EQ(ResolvedMinAppleFraction(o, masks), 0.6);
+  NoFruit detector;
+  SideInputs detected = masks;
+  detected.detector = &detector;
+  EXPECT_DOUBLE_EQ(ResolvedMinAppleFraction(o, detected), 0.5);
+  o.min_apple_fraction = 0;  // given: keep all
+  EXPECT_DOUBLE_EQ(ResolvedMinAppleFraction(o, masks), 0);
+  o.min_apple_fraction = 0.7;
+  EXPECT_DOUBLE_EQ(ResolvedMinAppleFraction(o, detected), 0.7);
+}
+
 // Frames of 3D balls (radius r) rendered as discs into label images.
 std::vector<FruitFrame> RenderBalls(const std::vector<CameraView>& views, const std::vector<Eigen::Vector3d>& balls,
                                     double r) {
@@ -678,7 +692,9 @@ TEST(EvidenceStatus, FewViewsGhostsAndSmallBlobsAreRemoved) {
   EXPECT_EQ(EvidenceStatus(c, o), "kept");
   c.apple_radius_seen = 0.01;  // no blob as large as half an apple at its depth
   EXPECT_EQ(EvidenceStatus(c, o), "small");
-  o.min_apple_fraction = -1;
+  o.min_apple_fraction = -1;  // auto: a detector's 0.5 when called directly
+  EXPECT_EQ(EvidenceStatus(c, o), "small");
+  o.min_apple_fraction = -0.5;
   EXPECT_THROW(o.Check(), Error);
   o.min_apple_fraction = 0.5;
   o.max_lost_fraction = 0;

@@ -189,7 +189,8 @@ void ClusterOptions::Check() const {
   ORCHARD_CHECK_OPTION(min_views >= 1, "min cluster views must be at least 1, got ", min_views);
   ORCHARD_CHECK_OPTION(max_lost_fraction > 0 && max_lost_fraction <= 1, "max lost fraction must be in (0, 1], got ",
                        max_lost_fraction);
-  ORCHARD_CHECK_OPTION(min_apple_fraction >= 0, "min apple fraction must be >= 0, got ", min_apple_fraction);
+  ORCHARD_CHECK_OPTION(min_apple_fraction >= 0 || min_apple_fraction == -1,
+                       "min apple fraction must be >= 0 (or -1: auto), got ", min_apple_fraction);
   ORCHARD_CHECK_OPTION(merge_shared_fraction >= 0 && merge_shared_fraction <= 1,
                        "merge shared fraction must be in [0, 1], got ", merge_shared_fraction);
   ORCHARD_CHECK_OPTION(duplicate_shared_fraction >= 0 && duplicate_shared_fraction <= 1,
@@ -224,6 +225,11 @@ int ResolvedEdgeMinPixels(const ClusterOptions& o, const SideInputs& in) {
   return in.detector ? 50 : 20;
 }
 
+double ResolvedMinAppleFraction(const ClusterOptions& o, const SideInputs& in) {
+  if (o.min_apple_fraction >= 0) return o.min_apple_fraction;
+  return in.detector ? 0.5 : 0.6;
+}
+
 const char* BestViewsName(ClusterOptions::BestViews best_views) {
   switch (best_views) {
     case ClusterOptions::BestViews::kPixels:
@@ -240,7 +246,9 @@ std::string EvidenceStatus(const FruitCluster& c, const ClusterOptions& o) {
   if (c.count == 0) return "no_views";
   if (static_cast<int>(c.views.size()) < o.min_views) return "few_views";
   if (c.votes_lost > o.max_lost_fraction * (c.votes_won + c.votes_lost)) return "ghost";
-  if (c.apple_radius_seen < o.min_apple_fraction * o.points.apple_radius) return "small";
+  // Auto (-1) is RunSide's to decide; called directly, a detector's 0.5.
+  const double min_apple_fraction = o.min_apple_fraction < 0 ? 0.5 : o.min_apple_fraction;
+  if (c.apple_radius_seen < min_apple_fraction * o.points.apple_radius) return "small";
   return "kept";
 }
 
@@ -1044,6 +1052,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   const auto resolved = [&in](ClusterOptions c) {
     c.best_views_by = ResolvedBestViews(c, in);
     c.edge.min_pixels = ResolvedEdgeMinPixels(c, in);
+    c.min_apple_fraction = ResolvedMinAppleFraction(c, in);
     return c;
   };
   const ClusterOptions clusters = resolved(o.clusters);
@@ -1193,6 +1202,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
       {"detector", in.detector_name},
       {"counter", in.counter_name},
       {"best_views_by", BestViewsName(clusters.best_views_by)},
+      {"min_apple_fraction", clusters.min_apple_fraction},
       {"scale", scale},
       {"ground_plane", {{"normal", {ground.normal.x(), ground.normal.y(), ground.normal.z()}}, {"d", ground.d},
                         {"source", ground_source}}},

@@ -54,8 +54,17 @@ struct ClusterOptions {
   // of partly hidden ones, placed in the filmed row. On 40 development sides
   // (exact masks) 74 of the 77 kept clusters that won mostly next-row blobs
   // showed less than 2 cm, and 47 of 6,644 clusters holding an apple
-  // (docs/side.md). 0 = keep all.
-  double min_apple_fraction = 0.5;
+  // (docs/side.md). 0 = keep all; -1 (auto): 0.6 for instance masks, 0.5
+  // for a detector's blobs (RunSide decides, ResolvedMinAppleFraction;
+  // CountFruitClusters takes auto as 0.5). The next row's apples
+  // seen through gaps in the leaves still showed 0.50-0.64 (a chance pairing
+  // of them placed in the filmed row, fresh seed 530's front); with instance
+  // masks, each blob one apple's visible part, 0.6 removed on 38 rows 33 of
+  // the 56 clusters on no visible apple and 78 of the 329 apples counted
+  // twice for 73 more missed: sides within 3% 71 -> 73 of 76, rows within 2%
+  // 31 -> 33 of 38. With the U-Net's blobs it took the sides' mean from
+  // -7.5% to -8.8% (14 rows; docs/side.md, forty-sixth session).
+  double min_apple_fraction = -1;
   // Clusters whose points land on the same blobs are one apple triangulated
   // twice: the centre of a partly hidden apple's visible piece shifts as the
   // leaves in front of it change, which moves a short-baseline pairing
@@ -344,6 +353,9 @@ ClusterOptions::BestViews ResolvedBestViews(const ClusterOptions& options, const
 // options.edge.min_pixels with 0 (auto) decided for these inputs: 20 for
 // instance masks, 50 for a detector's blobs (EdgeAppleOptions::min_pixels).
 int ResolvedEdgeMinPixels(const ClusterOptions& options, const SideInputs& in);
+// options.min_apple_fraction with -1 (auto) decided for these inputs: 0.6 for
+// instance masks, 0.5 for a detector's blobs.
+double ResolvedMinAppleFraction(const ClusterOptions& options, const SideInputs& in);
 // "auto", "pixels" or "count", as the command line and the outputs name them.
 const char* BestViewsName(ClusterOptions::BestViews best_views);
 // Whether a ground refit that takes the scale from `scale` to `refit_scale`

@@ -532,6 +532,7 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
       {"duplicate_shared_fraction", o.side.clusters.duplicate_shared_fraction},
       {"edge_apples", o.side.clusters.edge.enabled},
       {"edge_min_pixels", ResolvedEdgeMinPixels(o.side.clusters, in.front)},
+      {"min_apple_fraction", ResolvedMinAppleFraction(o.side.clusters, in.front)},
       {"best_views_by", BestViewsName(ResolvedBestViews(o.side.clusters, in.front))},
       {"sides_best_views_by", BestViewsName(ResolvedBestViews(one_side, in.front))},
       {"unlinked_count", unlinked_column},
