@@ -26,6 +26,11 @@ namespace {
 
 using Json = nlohmann::json;
 
+// ClusterOptions::min_apple_fraction's auto values: a detector's blobs, and
+// instance masks (each blob one apple's visible part).
+constexpr double kDetectorMinAppleFraction = 0.5;
+constexpr double kInstanceMinAppleFraction = 0.6;
+
 
 // Unit vectors along the camera path and across it (towards the row), both
 // in the ground plane.
@@ -227,7 +232,7 @@ int ResolvedEdgeMinPixels(const ClusterOptions& o, const SideInputs& in) {
 
 double ResolvedMinAppleFraction(const ClusterOptions& o, const SideInputs& in) {
   if (o.min_apple_fraction >= 0) return o.min_apple_fraction;
-  return in.detector ? 0.5 : 0.6;
+  return in.detector ? kDetectorMinAppleFraction : kInstanceMinAppleFraction;
 }
 
 const char* BestViewsName(ClusterOptions::BestViews best_views) {
@@ -246,8 +251,8 @@ std::string EvidenceStatus(const FruitCluster& c, const ClusterOptions& o) {
   if (c.count == 0) return "no_views";
   if (static_cast<int>(c.views.size()) < o.min_views) return "few_views";
   if (c.votes_lost > o.max_lost_fraction * (c.votes_won + c.votes_lost)) return "ghost";
-  // Auto (-1) is RunSide's to decide; called directly, a detector's 0.5.
-  const double min_apple_fraction = o.min_apple_fraction < 0 ? 0.5 : o.min_apple_fraction;
+  // Auto (-1) is RunSide's to decide; called directly, a detector's.
+  const double min_apple_fraction = o.min_apple_fraction < 0 ? kDetectorMinAppleFraction : o.min_apple_fraction;
   if (c.apple_radius_seen < min_apple_fraction * o.points.apple_radius) return "small";
   return "kept";
 }
@@ -628,13 +633,14 @@ FruitFrame FrameFruit(const SideInputs& in, const fs::path& image_path, const fs
     if (!j.is_discarded() && j.value("detector", "") == in.detector_name) {
       FruitFrame frame = FruitFromInstanceMask(ReadImage(cache_png, cv::IMREAD_UNCHANGED));
       const auto counts = j.value("counts", std::vector<int>());
-      if (j.value("counter", "") == in.counter_name && counts.size() == frame.blobs.size()) {
+      const bool same_counter = j.value("counter", "") == in.counter_name;
+      if (same_counter && counts.size() == frame.blobs.size()) {
         frame.counts = counts;
         return frame;
       }
       // Same detector, another counter: its blobs are counted again, not
       // detected again (detection is most of a side's time).
-      if (j.value("counter", "") != in.counter_name) return CountAndCache(in, ReadImage(image_path), std::move(frame), cache_dir, stem);
+      if (!same_counter) return CountAndCache(in, ReadImage(image_path), std::move(frame), cache_dir, stem);
     }
   }
   const cv::Mat image = ReadImage(image_path);
