@@ -27,6 +27,7 @@
 #include "orchard/eval/count_metrics.h"
 #include "orchard/eval/detection_metrics.h"
 #include "orchard/eval/plot.h"
+#include "orchard/eval/row_tally.h"
 #include "orchard/eval/segmentation_metrics.h"
 #include "orchard/eval/yield_metrics.h"
 
@@ -325,6 +326,49 @@ void RunEvalYield(const EvalYieldOptions& options) {
               m.estimate, m.percent_of_truth, m.error, m.relative_error);
 }
 
+// ----- rows --------------------------------------------------------------------
+
+struct EvalRowsOptions {
+  std::vector<std::string> runs;
+  std::string out;
+  RowTallyOptions tally;
+  void Check() const {
+    ORCHARD_CHECK_OPTION(!runs.empty() && !out.empty(), "give the `orchard yield` output folders and --out");
+    tally.Check();
+  }
+};
+
+json SummaryJson(const ErrorSummary& s, double tolerance) {
+  return {{"n", s.n}, {"within", s.within}, {"tolerance_percent", tolerance}, {"mae_percent", s.mae},
+          {"mean_percent", s.mean}, {"min_percent", s.min}, {"max_percent", s.max}};
+}
+
+void RunEvalRows(const EvalRowsOptions& options) {
+  options.Check();
+  std::vector<RowOutcome> rows;
+  for (const auto& run : options.runs) rows.push_back(ReadRowOutcome(run));
+  const RowTally t = TallyRows(rows, options.tally);
+  for (const auto& r : t.rows)
+    std::printf("%-16s front %+6.2f%%  back %+6.2f%%  row %+6.2f%% of visible (%g / %g), %.1f%% of harvested%s\n",
+                r.name.c_str(), r.front_percent(), r.back_percent(), r.row_percent(), r.total, r.visible_any,
+                r.harvested > 0 ? r.row_percent_of_harvested() : 0.0,
+                std::abs(r.front_percent()) > options.tally.side_tolerance ||
+                        std::abs(r.back_percent()) > options.tally.side_tolerance ||
+                        std::abs(r.row_percent()) > options.tally.row_tolerance
+                    ? "  *"
+                    : "");
+  std::printf("sides within %g%%: %d of %d (MAE %.2f%%, mean %+.2f%%, %+.1f..%+.1f%%)\n", options.tally.side_tolerance,
+              t.sides.within, t.sides.n, t.sides.mae, t.sides.mean, t.sides.min, t.sides.max);
+  std::printf("rows within %g%%: %d of %d (MAE %.2f%%, mean %+.2f%%, %+.1f..%+.1f%%), %.1f%% of harvested on average\n",
+              options.tally.row_tolerance, t.merged.within, t.merged.n, t.merged.mae, t.merged.mean, t.merged.min,
+              t.merged.max, t.mean_percent_of_harvested);
+  WriteTextFileAtomic(fs::path(options.out) / "rows.csv", RowTallyCsv(t, options.tally));
+  WriteJson(fs::path(options.out) / "summary.json",
+            {{"sides", SummaryJson(t.sides, options.tally.side_tolerance)},
+             {"rows", SummaryJson(t.merged, options.tally.row_tolerance)},
+             {"mean_percent_of_harvested", t.mean_percent_of_harvested}});
+}
+
 }  // namespace
 
 void AddEvalCommand(CLI::App& app) {
@@ -384,6 +428,21 @@ void AddEvalCommand(CLI::App& app) {
       ->required();
   y->add_option("--out", yield->out, "output folder")->required();
   y->callback([yield] { RunEvalYield(*yield); });
+
+  auto rows = std::make_shared<EvalRowsOptions>();
+  CLI::App* r = eval->add_subcommand(
+      "rows",
+      "Tally `orchard yield --truth` runs: each side against its visible apples, each row against the apples "
+      "visible from either side; how many fall within the tolerances (rows.csv, summary.json).");
+  r->add_option("runs", rows->runs, "`orchard yield` output folders (each with yield.json and its truth block)")
+      ->required();
+  r->add_option("--out", rows->out, "output folder")->required();
+  r->add_option("--side-tolerance", rows->tally.side_tolerance, "a side is within this percent of its visible apples")
+      ->capture_default_str();
+  r->add_option("--row-tolerance", rows->tally.row_tolerance,
+                "a row is within this percent of the apples visible from either side")
+      ->capture_default_str();
+  r->callback([rows] { RunEvalRows(*rows); });
 }
 
 }  // namespace orchard
