@@ -178,6 +178,26 @@ TEST(EvalCommand, CountSegmentYield) {
                 dir),
             1);
 
+  // Rows: two yield runs with truth; a run without truth is an error and writes nothing.
+  WriteTextFileAtomic(dir / "r1" / "yield.json",
+                      R"({"total": 196, "front": 103, "back": 100,
+                          "truth": {"visible_front": 100, "visible_back": 100, "visible_any": 200, "harvested": 250}})");
+  WriteTextFileAtomic(dir / "r2" / "yield.json",
+                      R"({"total": 210, "front": 90, "back": 100,
+                          "truth": {"visible_front": 100, "visible_back": 100, "visible_any": 200, "harvested": 250}})");
+  ASSERT_EQ(RunOrchard("eval rows " + Q(dir / "r1") + " " + Q(dir / "r2") + " --out " + Q(dir / "rows"), dir), 0);
+  const json r = json::parse(ReadTextFile(dir / "rows" / "summary.json"));
+  EXPECT_EQ(r["sides"]["within"], 3);  // +3, 0, -10, 0
+  EXPECT_EQ(r["rows"]["within"], 1);   // -2, +5
+  EXPECT_DOUBLE_EQ(r["rows"]["mae_percent"].get<double>(), 3.5);
+  EXPECT_NE(ReadTextFile(dir / "rows" / "rows.csv").find("\nr2,"), std::string::npos);
+  WriteTextFileAtomic(dir / "r3" / "yield.json", R"({"total": 210, "front": 90, "back": 100})");
+  std::string err;
+  EXPECT_EQ(RunOrchard("eval rows " + Q(dir / "r1") + " " + Q(dir / "r3") + " --out " + Q(dir / "rows2"), dir, &err),
+            1);
+  EXPECT_NE(err.find("no \"truth\" block"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(dir / "rows2" / "summary.json"));
+
   // Segmentation: a perfect mask and a missing one.
   fs::create_directories(dir / "gtm");
   fs::create_directories(dir / "pm");
