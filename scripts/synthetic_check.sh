@@ -15,7 +15,8 @@
 # (`--canopy-thickness 0.5`, many apples seen from both sides), as in the
 # batches reported in docs/side.md and docs/yield.md. Rows run JOBS at a time
 # (default 2, one thread each). Rerunning resumes: rows already generated are
-# kept, runs already finished are not redone. Writes OUT_DIR/rows/rSEED (the
+# kept, runs already finished are not redone (other YIELD_OPTIONS need another
+# OUT_DIR, or OUT_DIR/runs removed). Writes OUT_DIR/rows/rSEED (the
 # generated rows), OUT_DIR/runs/SEED (the yield outputs, logs beside them) and
 # OUT_DIR/tally/{rows.csv,summary.json}.
 set -euo pipefail
