@@ -347,16 +347,16 @@ void RunEvalRows(const EvalRowsOptions& options) {
   options.Check();
   std::vector<RowOutcome> rows;
   for (const auto& run : options.runs) rows.push_back(ReadRowOutcome(run));
-  const RowTally t = TallyRows(rows, options.tally);
-  for (const auto& r : t.rows)
+  const RowTally t = TallyRows(std::move(rows), options.tally);
+  const RowTallyOptions& tol = options.tally;
+  for (const auto& r : t.rows) {
+    const bool within = WithinTolerance(r.front_percent(), tol.side_tolerance) &&
+                        WithinTolerance(r.back_percent(), tol.side_tolerance) &&
+                        WithinTolerance(r.row_percent(), tol.row_tolerance);
     std::printf("%-16s front %+6.2f%%  back %+6.2f%%  row %+6.2f%% of visible (%g / %g), %.1f%% of harvested%s\n",
                 r.name.c_str(), r.front_percent(), r.back_percent(), r.row_percent(), r.total, r.visible_any,
-                r.harvested > 0 ? r.row_percent_of_harvested() : 0.0,
-                std::abs(r.front_percent()) > options.tally.side_tolerance ||
-                        std::abs(r.back_percent()) > options.tally.side_tolerance ||
-                        std::abs(r.row_percent()) > options.tally.row_tolerance
-                    ? "  *"
-                    : "");
+                r.harvested > 0 ? r.row_percent_of_harvested() : 0.0, within ? "" : "  *");
+  }
   std::printf("sides within %g%%: %d of %d (MAE %.2f%%, mean %+.2f%%, %+.1f..%+.1f%%)\n", options.tally.side_tolerance,
               t.sides.within, t.sides.n, t.sides.mae, t.sides.mean, t.sides.min, t.sides.max);
   std::printf("rows within %g%%: %d of %d (MAE %.2f%%, mean %+.2f%%, %+.1f..%+.1f%%), %.1f%% of harvested on average\n",

@@ -16,6 +16,8 @@ void RowTallyOptions::Check() const {
                        side_tolerance, " and ", row_tolerance);
 }
 
+bool WithinTolerance(double percent, double tolerance) { return std::abs(percent) <= tolerance + 1e-9; }
+
 ErrorSummary SummariseErrors(const std::vector<double>& percent, double tolerance) {
   ErrorSummary s;
   s.n = static_cast<int>(percent.size());
@@ -23,8 +25,7 @@ ErrorSummary SummariseErrors(const std::vector<double>& percent, double toleranc
   s.min = *std::min_element(percent.begin(), percent.end());
   s.max = *std::max_element(percent.begin(), percent.end());
   for (double e : percent) {
-    // A hair of slack so that an error printed as exactly the tolerance counts as within.
-    s.within += std::abs(e) <= tolerance + 1e-9;
+    s.within += WithinTolerance(e, tolerance);
     s.mae += std::abs(e) / s.n;
     s.mean += e / s.n;
   }
@@ -34,13 +35,14 @@ ErrorSummary SummariseErrors(const std::vector<double>& percent, double toleranc
 RowTally TallyRows(std::vector<RowOutcome> rows, const RowTallyOptions& options) {
   options.Check();
   RowTally t;
-  std::vector<double> sides, merged;
+  std::vector<double> sides, merged, of_harvested;
   for (const auto& r : rows) {
     sides.push_back(r.front_percent());
     sides.push_back(r.back_percent());
     merged.push_back(r.row_percent());
-    if (r.harvested > 0) t.mean_percent_of_harvested += r.row_percent_of_harvested() / rows.size();
+    if (r.harvested > 0) of_harvested.push_back(r.row_percent_of_harvested());
   }
+  for (double p : of_harvested) t.mean_percent_of_harvested += p / of_harvested.size();
   t.sides = SummariseErrors(sides, options.side_tolerance);
   t.merged = SummariseErrors(merged, options.row_tolerance);
   t.rows = std::move(rows);
@@ -90,9 +92,9 @@ std::string RowTallyCsv(const RowTally& tally, const RowTallyOptions& options) {
     s << r.name << ',' << r.front << ',' << r.visible_front << ',' << r.front_percent() << ',' << r.back << ','
       << r.visible_back << ',' << r.back_percent() << ',' << r.total << ',' << r.visible_any << ','
       << r.row_percent() << ',' << r.harvested << ',' << (r.harvested > 0 ? r.row_percent_of_harvested() : 0.0)
-      << ',' << r.sum_of_sides << ',' << (std::abs(r.front_percent()) <= options.side_tolerance + 1e-9) << ','
-      << (std::abs(r.back_percent()) <= options.side_tolerance + 1e-9) << ','
-      << (std::abs(r.row_percent()) <= options.row_tolerance + 1e-9) << '\n';
+      << ',' << r.sum_of_sides << ',' << WithinTolerance(r.front_percent(), options.side_tolerance) << ','
+      << WithinTolerance(r.back_percent(), options.side_tolerance) << ','
+      << WithinTolerance(r.row_percent(), options.row_tolerance) << '\n';
   }
   return s.str();
 }

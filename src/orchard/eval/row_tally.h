@@ -32,6 +32,10 @@ struct RowTallyOptions {
   void Check() const;
 };
 
+// |percent| <= tolerance, with a hair of slack so that an error printed as
+// exactly the tolerance counts as within (103 of 100 is 3.0000000000000036%).
+bool WithinTolerance(double percent, double tolerance);
+
 // Signed errors in percent summarised: how many within the tolerance, the
 // mean absolute error, the mean, and the extremes.
 struct ErrorSummary {
@@ -43,7 +47,7 @@ ErrorSummary SummariseErrors(const std::vector<double>& percent, double toleranc
 struct RowTally {
   std::vector<RowOutcome> rows;
   ErrorSummary sides, merged;  // sides: front and back of every row
-  double mean_percent_of_harvested = 0;
+  double mean_percent_of_harvested = 0;  // over the rows whose truth gives the harvest
 };
 
 RowTally TallyRows(std::vector<RowOutcome> rows, const RowTallyOptions& options);
