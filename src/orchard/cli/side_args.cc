@@ -146,6 +146,19 @@ void AddSideOptions(CLI::App* cmd, SideOptions* options) {
   cmd->add_option("--edge-window", o.clusters.edge.window,
                   "Edge apples: slivers at most this many frames apart may be one apple")
       ->capture_default_str();
+  cmd->add_flag("--glimpsed-apples,!--no-glimpsed-apples", o.clusters.glimpsed.enabled,
+                "Count apples glimpsed through the leaves: pieces no cluster explains that a sphere of apple size "
+                "holds in several frames (default; for a detector's blobs only with --glimpsed-with-detector)");
+  cmd->add_flag("--glimpsed-with-detector", o.clusters.glimpsed.with_detector,
+                "Glimpsed apples among a detector's blobs too (off: a quarter of what the U-Net's add is an apple)");
+  cmd->add_option("--glimpse-min-support", o.clusters.glimpsed.min_support,
+                  "Glimpsed apples: frames whose sphere's disc holds a free piece")
+      ->capture_default_str();
+  cmd->add_option("--glimpse-min-pixels", o.clusters.glimpsed.min_pixels, "Glimpsed apples: smallest piece (pixels)")
+      ->capture_default_str();
+  cmd->add_option("--glimpse-min-extent", o.clusters.glimpsed.min_extent,
+                  "Glimpsed apples: a piece's longest chord is at least this many times the disc's radius")
+      ->capture_default_str();
   cmd->add_option("--draw-every", o.draw_every, "Annotate every n-th frame (0 = none)")->capture_default_str();
 }
 

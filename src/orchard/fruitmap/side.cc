@@ -216,6 +216,7 @@ void ClusterOptions::Check() const {
   ORCHARD_CHECK_OPTION(next_row_margin > 0, "next-row margin must be positive, got ", next_row_margin);
   ORCHARD_CHECK_OPTION(near_margin > 0, "near margin must be positive, got ", near_margin);
   edge.Check();
+  glimpsed.Check();
 }
 
 ClusterOptions::BestViews ResolvedBestViews(const ClusterOptions& o, const SideInputs& in) {
@@ -233,6 +234,10 @@ int ResolvedEdgeMinPixels(const ClusterOptions& o, const SideInputs& in) {
 double ResolvedMinAppleFraction(const ClusterOptions& o, const SideInputs& in) {
   if (o.min_apple_fraction >= 0) return o.min_apple_fraction;
   return in.detector ? kDetectorMinAppleFraction : kInstanceMinAppleFraction;
+}
+
+bool ResolvedGlimpsedApples(const ClusterOptions& o, const SideInputs& in) {
+  return o.glimpsed.enabled && (!in.detector || o.glimpsed.with_detector);
 }
 
 const char* BestViewsName(ClusterOptions::BestViews best_views) {
@@ -306,6 +311,60 @@ void AddEdgeApples(const std::vector<CameraView>& views, const std::vector<Fruit
     c.distance = a.distance;
     if (c.distance > r->depth_cutoff) c.status = "next_row";
     if (c.status == "kept") r->count += c.count, ++r->edge_apples;
+    r->clusters.push_back(std::move(c));
+  }
+}
+
+// Appends the apples glimpsed through the leaves (GlimpsedAppleOptions) to
+// `r` as kept clusters of one apple each, after the kept clusters and edge
+// apples, whose points explain the pieces of the apples they hold.
+void AddGlimpsedApples(const std::vector<CameraView>& views, const std::vector<FruitFrame>& frames,
+                       const Plane& ground, const ClusterOptions& o, ClusterResult* r) {
+  // A piece a counted cluster's point lies on is that cluster's apple; one a
+  // next-row or fallen cluster's point lies on is that apple (the next
+  // row's apples, seen through gaps in the leaves, are most of the pieces no
+  // kept cluster holds). Pieces of clusters removed for weak evidence stay
+  // free: they may be an apple glimpsed too rarely for a cluster.
+  std::vector<Eigen::Vector3d> explained;
+  for (const auto& c : r->clusters)
+    if (c.status == "kept" || c.status == "too_few_points" || c.status == "next_row" || c.status == "fallen")
+      for (int i : c.points) explained.push_back(r->points[i].xyz);
+  const RowFrame row{r->row_origin, r->row_along, r->row_across, r->row_up, r->row_distance};
+  if (row.row_distance <= 0) return;
+  for (const GlimpsedApple& a : FindGlimpsedApples(views, frames, explained, row, r->depth_cutoff, o.glimpsed)) {
+    FruitCluster c;
+    c.id = static_cast<int>(r->clusters.size()) + 1;
+    c.glimpsed = true;
+    c.centre = a.centre;
+    c.min = c.max = a.piece_points[0];
+    for (size_t i = 0; i < a.pieces.size(); ++i) {
+      const auto [f, id] = a.pieces[i];
+      const Eigen::Vector3d& X = a.piece_points[i];
+      c.min = c.min.cwiseMin(X), c.max = c.max.cwiseMax(X);
+      c.points.push_back(static_cast<int>(r->points.size()));
+      r->points.push_back({X, f, id, static_cast<int>(a.pieces.size())});
+      r->point_cluster.push_back(static_cast<int>(r->clusters.size()));
+      c.views.push_back({f, frames[f].FindBlob(id)->pixels, 1});
+      c.view_blobs.push_back({id});
+      // Its place along the line of sight is the sphere's depth, a guess:
+      // the merge links it along the rays (as an edge apple) and the
+      // registrations leave it out.
+      const Eigen::Vector3d camera = views[f].Center();
+      const Eigen::Vector3d dir = (a.centre - camera).normalized();
+      const double speed = row.across.dot(dir);
+      if (speed <= 1e-9) continue;  // not across the row: no ray to link along
+      const auto at = [&](double d) { return camera + dir * ((d - row.across.dot(camera - row.origin)) / speed); };
+      c.edge_rays.emplace_back(at(a.distance - o.glimpsed.ray_margin), at(a.distance + o.glimpsed.ray_margin));
+      Eigen::Vector2d pixel;
+      views[f].Project(a.centre, &pixel);
+      c.edge_columns.push_back(pixel.x());
+    }
+    c.count = c.count_by_pixels = c.count_by_count = MedianOfBestViews(c.views, o.best_views, &c.count_frames);
+    c.height = ground.SignedDistance(c.centre);
+    c.distance = a.distance;
+    if (c.height < o.fallen_height) c.status = "fallen";
+    if (c.distance > r->depth_cutoff) c.status = "next_row";
+    if (c.status == "kept") r->count += c.count, ++r->glimpsed_apples;
     r->clusters.push_back(std::move(c));
   }
 }
@@ -474,6 +533,7 @@ ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std
     if (c.status == "kept") r.count += c.count;
   }
   if (o.edge.enabled) AddEdgeApples(views, frames, ground, o, &r);
+  if (o.glimpsed.enabled) AddGlimpsedApples(views, frames, ground, o, &r);
   return r;
 }
 
@@ -671,7 +731,7 @@ void WriteOutputs(const fs::path& out, const std::vector<fs::path>& image_paths,
                   const std::vector<CameraView>& views, const ClusterResult& r, const SideOptions& o) {
   std::ostringstream csv;
   csv << "id,x,y,z,extent_x,extent_y,extent_z,points,count,status,height,distance,frames,views,votes_won,votes_lost,"
-         "apple_radius,count_by_pixels,count_by_count,edge\n";
+         "apple_radius,count_by_pixels,count_by_count,edge,glimpsed\n";
   csv.precision(4);
   csv << std::fixed;
   for (const auto& c : r.clusters) {
@@ -682,7 +742,8 @@ void WriteOutputs(const fs::path& out, const std::vector<fs::path>& image_paths,
     for (size_t i = 0; i < c.count_frames.size(); ++i)
       csv << (i ? ";" : "") << image_paths[c.count_frames[i]].filename().string();
     csv << ',' << c.views.size() << ',' << c.votes_won << ',' << c.votes_lost << ',' << c.apple_radius_seen << ','
-        << c.count_by_pixels << ',' << c.count_by_count << ',' << (c.edge ? 1 : 0) << '\n';
+        << c.count_by_pixels << ',' << c.count_by_count << ',' << (c.edge ? 1 : 0) << ',' << (c.glimpsed ? 1 : 0)
+        << '\n';
   }
   WriteTextFileAtomic(out / "clusters.csv", csv.str());
   // Edge apples' rays: written always, so none is left from an earlier run.
@@ -1059,6 +1120,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
     c.best_views_by = ResolvedBestViews(c, in);
     c.edge.min_pixels = ResolvedEdgeMinPixels(c, in);
     c.min_apple_fraction = ResolvedMinAppleFraction(c, in);
+    c.glimpsed.enabled = ResolvedGlimpsedApples(c, in);
     return c;
   };
   const ClusterOptions clusters = resolved(o.clusters);
@@ -1231,7 +1293,8 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
       {"depth_cutoff_from", r.depth_cutoff_from_gap ? "gap" : "margin"},
       {"fruit_points", r.triangulated_points},
       {"clusters", {{"total", r.clusters.size()}, {"kept", s.clusters_kept}, {"removed", removed},
-                    {"duplicates_joined", r.duplicates_joined}, {"edge_apples", r.edge_apples}}},
+                    {"duplicates_joined", r.duplicates_joined}, {"edge_apples", r.edge_apples},
+                    {"glimpsed_apples", r.glimpsed_apples}}},
       {"warnings", warnings},
       {"timings_s", {{"poses", s.poses_s}, {"fruit", s.fruit_s}, {"clusters", s.clusters_s}, {"outputs", s.outputs_s}}},
   };

@@ -16,6 +16,8 @@
 #include "orchard/detect/detector.h"
 #include "orchard/fruitmap/clusters.h"
 #include "orchard/fruitmap/edge_apples.h"
+#include "orchard/fruitmap/glimpsed_apples.h"
+#include "orchard/fruitmap/glimpsed_apples.h"
 #include "orchard/fruitmap/fruit_points.h"
 #include "orchard/sfm/camera_view.h"
 #include "orchard/sfm/colmap_runner.h"
@@ -163,6 +165,9 @@ struct ClusterOptions {
   // Apples seen only as slivers at the frames' top edge (edge_apples.h): each
   // is one more kept cluster of one apple, marked `edge`.
   EdgeAppleOptions edge;
+  // Apples glimpsed through the leaves (glimpsed_apples.h): each is one more
+  // kept cluster of one apple, marked `glimpsed`.
+  GlimpsedAppleOptions glimpsed;
   void Check() const;
 };
 
@@ -192,6 +197,9 @@ struct FruitCluster {
   // Seen only as slivers at the frames' top edge (EdgeAppleOptions): one
   // apple, its points the slivers' rays at its distance.
   bool edge = false;
+  // Seen only as small pieces in scattered frames (GlimpsedAppleOptions): one
+  // apple, its points the pieces' rays at its distance.
+  bool glimpsed = false;
   // An edge apple's sightings: each sliver's ray through the row's fruit
   // (EdgeAppleOptions' margins about the row distance), near end first. The
   // merge links it along these (side output edge_rays.csv).
@@ -219,6 +227,7 @@ struct ClusterResult {
   int single_frame_sum = 0; // sum of all blob counts over all frames
   int duplicates_joined = 0;  // components joined to a partner (ClusterOptions::duplicate_shared_fraction)
   int edge_apples = 0;        // kept clusters seen only at the frames' top edge (FruitCluster::edge)
+  int glimpsed_apples = 0;    // kept clusters seen only as pieces through the leaves (FruitCluster::glimpsed)
 };
 
 // The next-row cut (ClusterOptions::next_row_gap) from the distances of
@@ -356,6 +365,9 @@ int ResolvedEdgeMinPixels(const ClusterOptions& options, const SideInputs& in);
 // options.min_apple_fraction with -1 (auto) decided for these inputs: 0.6 for
 // instance masks, 0.5 for a detector's blobs.
 double ResolvedMinAppleFraction(const ClusterOptions& options, const SideInputs& in);
+// Whether the side looks for apples glimpsed through the leaves:
+// glimpsed.enabled, and for a detector's blobs glimpsed.with_detector too.
+bool ResolvedGlimpsedApples(const ClusterOptions& options, const SideInputs& in);
 // "auto", "pixels" or "count", as the command line and the outputs name them.
 const char* BestViewsName(ClusterOptions::BestViews best_views);
 // Whether a ground refit that takes the scale from `scale` to `refit_scale`

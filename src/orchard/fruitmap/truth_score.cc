@@ -102,10 +102,10 @@ SideTruthScore ScoreSideAgainstTruth(const std::vector<CameraView>& views, const
     v.count = cluster.count;
     // An edge apple's points lie on its slivers only in their own frames
     // (elsewhere their distance is a guess): one vote each, enough.
-    if (cluster.edge) v.min_votes = 1;
+    if (cluster.edge || cluster.glimpsed) v.min_votes = 1;
     for (int p : cluster.points)
       for (size_t f = 0; f < views.size(); ++f) {
-        if (cluster.edge && static_cast<int>(f) != result.points[p].frame) continue;
+        if ((cluster.edge || cluster.glimpsed) && static_cast<int>(f) != result.points[p].frame) continue;
         Eigen::Vector2d pixel;
         if (views[f].Depth(result.points[p].xyz) <= 0 || !views[f].Project(result.points[p].xyz, &pixel)) continue;
         if (const int id = AppleAt(truth_masks[f], pixel, o.window_px); id >= 0) ++v.votes[id];

@@ -15,6 +15,10 @@ struct MapCluster {
   double along = 0, height = 0;  // m, in the row frame
   int count = 0;
   double shared = 0;  // apples of it also counted on the other side
+  // Its part of the merged total: count - shared / 2 (each side takes half
+  // of what two share), or count - shared for an edge or glimpsed apple on
+  // the other side's tracked cluster (its apple is that cluster's).
+  double part = 0;
 };
 
 // `yield` is the content of yield.json; `frames` are paths of sample frames

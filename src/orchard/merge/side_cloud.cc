@@ -112,9 +112,14 @@ SideCloud LoadSideCloud(const fs::path& dir, const std::string& name, const std:
       Fail(name, " side: ", csv_path.string(), " has no column ", unlinked_count_column,
            " (made by an older version? run the side again)");
     const size_t unlinked_col = static_cast<size_t>(unlinked_it - header.begin());
-    // Sides written before edge apples have no `edge` column.
-    const auto edge_it = std::find(header.begin(), header.end(), "edge");
-    const size_t edge_col = edge_it == header.end() ? 0 : static_cast<size_t>(edge_it - header.begin());
+    // Sides written before edge apples have no `edge` column, before glimpsed
+    // apples no `glimpsed` column.
+    const auto column = [&header](const char* name) {
+      const auto it = std::find(header.begin(), header.end(), name);
+      return it == header.end() ? size_t{0} : static_cast<size_t>(it - header.begin());
+    };
+    const size_t edge_col = column("edge"), glimpsed_col = column("glimpsed");
+    const auto flag = [](const std::vector<std::string>& f, size_t col) { return col > 0 && col < f.size() && f[col] == "1"; };
     int row = 1;
     while (std::getline(csv, line)) {
       ++row;
@@ -127,7 +132,7 @@ SideCloud LoadSideCloud(const fs::path& dir, const std::string& name, const std:
         c.id = std::stoi(f[0]);
         c.count = std::stoi(f[8]);
         c.count_unlinked = std::stoi(f[unlinked_col]);
-        c.edge = edge_col > 0 && edge_col < f.size() && f[edge_col] == "1";
+        c.edge = flag(f, edge_col) || flag(f, glimpsed_col);
         if (f.size() > 12) count_frames[c.id] = f[12];
       } catch (const std::exception&) {
         Fail(name, " side: ", csv_path.string(), " line ", row, ": bad id or count");

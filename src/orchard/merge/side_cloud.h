@@ -24,10 +24,11 @@ struct SideCluster {
   std::vector<Eigen::Vector3d> points;  // fruit points, row frame
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
   Eigen::Vector3d min = Eigen::Vector3d::Zero(), max = Eigen::Vector3d::Zero();
-  // Seen only as slivers at the frames' top edge (clusters.csv `edge`): its
-  // place along the slivers' rays is a guess, so the merge links it along
-  // them (edge_rays.csv: each ray's ends in the row's fruit, consecutive
-  // pairs here, moved with the points), and registrations leave it out.
+  // Seen only as slivers at the frames' top edge (clusters.csv `edge`) or as
+  // pieces through the leaves (`glimpsed`): its place along the slivers' or
+  // pieces' rays is a guess, so the merge links it along them (edge_rays.csv:
+  // each ray's ends, consecutive pairs here, moved with the points), and
+  // registrations leave it out.
   bool edge = false;
   std::vector<Eigen::Vector3d> ray_ends;
   // Camera centres of the frames its count came from (clusters.csv `frames`,

@@ -422,14 +422,14 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
 
   // Per-metre map: each cluster's count minus half of what it shares.
   std::vector<MapCluster> map;
-  for (size_t i = 0; i < front_cloud.clusters.size(); ++i) {
-    const auto& c = front_cloud.clusters[i];
-    map.push_back({"front", c.centre.x(), c.centre.z(), c.count, shared.front_shared[i]});
-  }
-  for (size_t i = 0; i < back_in_front.size(); ++i) {
-    const auto& c = back_in_front[i];
-    map.push_back({"back", c.centre.x(), c.centre.z(), c.count, shared.back_shared[i]});
-  }
+  const auto map_cluster = [](const char* side, const SideCluster& c, double shared_part, bool on_tracked) {
+    return MapCluster{side, c.centre.x(), c.centre.z(), c.count, shared_part,
+                      c.count - (on_tracked ? shared_part : 0.5 * shared_part)};
+  };
+  for (size_t i = 0; i < front_cloud.clusters.size(); ++i)
+    map.push_back(map_cluster("front", front_cloud.clusters[i], shared.front_shared[i], shared.front_edge_on[i] >= 0));
+  for (size_t i = 0; i < back_in_front.size(); ++i)
+    map.push_back(map_cluster("back", back_in_front[i], shared.back_shared[i], shared.back_edge_on[i] >= 0));
   Json per_metre = Json::array();
   if (!map.empty()) {
     double x0 = map[0].along, x1 = x0;
@@ -438,7 +438,7 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
     const int bins = std::max(1, static_cast<int>(std::ceil((x1 - x0) / o.bin_length + 1e-9)));
     std::vector<double> sum(bins, 0);
     for (const auto& m : map)
-      sum[std::min(bins - 1, static_cast<int>((m.along - x0) / o.bin_length))] += m.count - 0.5 * m.shared;
+      sum[std::min(bins - 1, static_cast<int>((m.along - x0) / o.bin_length))] += m.part;
     for (int b = 0; b < bins; ++b) {
       per_metre.push_back({{"from", x0 + b * o.bin_length}, {"to", x0 + (b + 1) * o.bin_length},
                            {"count", std::round(sum[b] * 10) / 10}});
@@ -461,7 +461,7 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
     std::vector<double> sum(trees.size(), 0);
     for (const auto& m : map) {
       const int k = TreeAt(trees, m.along, 0.5 * o.bin_length);
-      (k >= 0 ? sum[k] : per_tree_outside) += m.count - 0.5 * m.shared;
+      (k >= 0 ? sum[k] : per_tree_outside) += m.part;
     }
     for (size_t k = 0; k < trees.size(); ++k) {
       per_tree.push_back({{"tree", k},
@@ -531,6 +531,7 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
       {"vote_near_first", o.side.clusters.vote_near_first},
       {"duplicate_shared_fraction", o.side.clusters.duplicate_shared_fraction},
       {"edge_apples", o.side.clusters.edge.enabled},
+      {"glimpsed_apples", ResolvedGlimpsedApples(o.side.clusters, in.front)},
       {"edge_min_pixels", ResolvedEdgeMinPixels(o.side.clusters, in.front)},
       {"min_apple_fraction", ResolvedMinAppleFraction(o.side.clusters, in.front)},
       {"best_views_by", BestViewsName(ResolvedBestViews(o.side.clusters, in.front))},
