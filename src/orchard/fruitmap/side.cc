@@ -270,6 +270,14 @@ ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std
 
 namespace {
 
+// Adds `point` to `r` as a point of the cluster `c`, which `r` will hold next.
+void AppendPoint(const FruitPoint& point, FruitCluster* c, ClusterResult* r) {
+  c->min = c->min.cwiseMin(point.xyz), c->max = c->max.cwiseMax(point.xyz);
+  c->points.push_back(static_cast<int>(r->points.size()));
+  r->points.push_back(point);
+  r->point_cluster.push_back(static_cast<int>(r->clusters.size()));
+}
+
 // Appends the apples seen only at the frames' top edge (EdgeAppleOptions) to
 // `r` as kept clusters of one apple each, after the kept clusters, whose
 // points explain the slivers of the apples they hold.
@@ -295,10 +303,7 @@ void AddEdgeApples(const std::vector<CameraView>& views, const std::vector<Fruit
     for (size_t i = 0; i < a.sightings.size(); ++i) {
       const EdgeSighting& s = sightings[a.sightings[i]];
       const Eigen::Vector3d& X = a.sighting_points[i];
-      c.min = c.min.cwiseMin(X), c.max = c.max.cwiseMax(X);
-      c.points.push_back(static_cast<int>(r->points.size()));
-      r->points.push_back({X, s.frame, s.blobs[0], static_cast<int>(a.sightings.size())});
-      r->point_cluster.push_back(static_cast<int>(r->clusters.size()));
+      AppendPoint({X, s.frame, s.blobs[0], static_cast<int>(a.sightings.size())}, &c, r);
       c.views.push_back({s.frame, s.pixels, 1});
       c.edge_rays.emplace_back(SightingAtDistance(s, row, row.row_distance - o.edge.near_margin),
                                SightingAtDistance(s, row, row.row_distance + o.edge.far_margin));
@@ -340,10 +345,7 @@ void AddGlimpsedApples(const std::vector<CameraView>& views, const std::vector<F
     for (size_t i = 0; i < a.pieces.size(); ++i) {
       const auto [f, id] = a.pieces[i];
       const Eigen::Vector3d& X = a.piece_points[i];
-      c.min = c.min.cwiseMin(X), c.max = c.max.cwiseMax(X);
-      c.points.push_back(static_cast<int>(r->points.size()));
-      r->points.push_back({X, f, id, static_cast<int>(a.pieces.size())});
-      r->point_cluster.push_back(static_cast<int>(r->clusters.size()));
+      AppendPoint({X, f, id, static_cast<int>(a.pieces.size())}, &c, r);
       c.views.push_back({f, frames[f].FindBlob(id)->pixels, 1});
       c.view_blobs.push_back({id});
       // Its place along the line of sight is the sphere's depth, a guess:
