@@ -70,6 +70,12 @@ void AddYieldCommand(CLI::App& app) {
   cmd->add_option("--intersection-per-residual", o.intersection_per_residual,
                   "Widen the intersection distance to this many times the registration's residual (0 = fixed)")
       ->capture_default_str();
+  cmd->add_option("--glimpse-link", o.shared.glimpse_across,
+                  "A glimpsed apple links to a cluster of the other side with a point this near (m) one of its rays")
+      ->capture_default_str();
+  cmd->add_option("--glimpse-link-vertical", o.shared.glimpse_vertical,
+                  "... and at most this far (m) over or under it")
+      ->capture_default_str();
   cmd->add_option("--sight-link", o.shared.sight_across,
                   "Link two clusters linked to nothing when one lies within this (m) of the other's lines of sight, "
                   "behind it: a partly hidden apple seen through a gap in the leaves (0 = off)")

@@ -737,6 +737,27 @@ TEST(SharedCountTest, EdgeApplesLinkAlongTheirSliversRays) {
   EXPECT_THROW(bad.Check(), Error);
 }
 
+TEST(SharedCountTest, GlimpsedApplesLinkAlongRaysThroughTheirCentre) {
+  // The back glimpsed an apple through the leaves: its ray passes through
+  // the sphere found for it, 2.6 m across and 1.50 m up (depth a guess).
+  SideCluster glimpsed = EdgeApple(1, {0, 2.3, 1.50}, {0, 2.9, 1.50});
+  glimpsed.glimpsed = true;
+  const std::vector<SideCluster> back = {glimpsed};
+  SharedCountOptions o;
+  o.glimpse_across = 0.04, o.glimpse_vertical = 0.06;
+  // The front tracks the apple, its point 5 cm under the ray: one apple.
+  EXPECT_EQ(CountSharedApples({Cluster(1, 1, {{0.01, 2.5, 1.45}})}, back, o).total, 1);
+  // ... above it too (a sliver's rule would take it only from 3 cm under).
+  EXPECT_EQ(CountSharedApples({Cluster(1, 1, {{0.01, 2.5, 1.55}})}, back, o).total, 1);
+  glimpsed.glimpsed = false;
+  EXPECT_EQ(CountSharedApples({Cluster(1, 1, {{0.01, 2.5, 1.45}})}, {glimpsed}, o).total, 2);
+  // Beside the ray, or farther under it, another apple.
+  EXPECT_EQ(CountSharedApples({Cluster(1, 1, {{0.06, 2.5, 1.50}})}, back, o).total, 2);
+  EXPECT_EQ(CountSharedApples({Cluster(1, 1, {{0.0, 2.5, 1.42}})}, back, o).total, 2);
+  o.glimpse_vertical = 0;
+  EXPECT_THROW(o.Check(), Error);
+}
+
 TEST(SharedCountTest, ClustersLinkAlongALineOfSightThroughAGapInTheLeaves) {
   // Front frame: front cameras at y = 0, back cameras at y = 5, 1.5 m up.
   // The back holds an apple at a (2.8 m across); the front sees it through a
@@ -903,6 +924,19 @@ TEST(SideCloudTest, LoadsEdgeApplesWithTheirRays) {
   ScaleSideCloud(&cloud, 2);
   EXPECT_TRUE(cloud.clusters[1].ray_ends[1].isApprox(Eigen::Vector3d(2, 7, 5.7)));
   EXPECT_EQ(WithoutEdgeApples(cloud).clusters.size(), 1u);
+  // A glimpsed apple is linked along its rays too, and left out as well.
+  WriteTextFileAtomic(dir / "clusters.csv",
+                      "id,x,y,z,extent_x,extent_y,extent_z,points,count,status,count_by_pixels,count_by_count,edge,"
+                      "glimpsed\n"
+                      "1,1,2,1,0,0,0,1,1,kept,1,1,0,0\n"
+                      "2,2,2.5,2.6,0,0,0,1,1,kept,1,1,0,1\n");
+  const SideCloud with_glimpsed = LoadSideCloud(dir, "front");
+  ASSERT_EQ(with_glimpsed.clusters.size(), 2u);
+  EXPECT_FALSE(with_glimpsed.clusters[0].glimpsed);
+  EXPECT_TRUE(with_glimpsed.clusters[1].glimpsed);
+  EXPECT_TRUE(with_glimpsed.clusters[1].edge);
+  EXPECT_EQ(with_glimpsed.clusters[1].ray_ends.size(), 2u);
+  EXPECT_EQ(WithoutEdgeApples(with_glimpsed).clusters.size(), 1u);
   // The count frames' camera centres from cameras.csv, in the row frame.
   WriteTextFileAtomic(dir / "clusters.csv",
                       "id,x,y,z,extent_x,extent_y,extent_z,points,count,status,height,distance,frames\n"

@@ -14,6 +14,8 @@ namespace orchard {
 void SharedCountOptions::Check() const {
   ORCHARD_CHECK_OPTION(intersection_distance > 0, "intersection distance must be positive, got ",
                        intersection_distance);
+  ORCHARD_CHECK_OPTION(glimpse_across > 0 && glimpse_vertical > 0, "glimpse link distances must be positive, got ",
+                       glimpse_across, ", ", glimpse_vertical);
   ORCHARD_CHECK_OPTION(edge_across > 0 && edge_below >= 0 && edge_above > 0,
                        "edge link distances must be positive, got ", edge_across, ", ", edge_below, ", ", edge_above);
   ORCHARD_CHECK_OPTION(sight_across >= 0 && sight_min_behind >= 0 && sight_max_behind > sight_min_behind,
@@ -63,8 +65,11 @@ bool OnAnySliverRay(const Eigen::Vector3d& p, const SideCluster& edge, double ac
 // are one apple (SharedCountOptions::edge_across and the rest).
 bool EdgeLinks(const SideCluster& edge, const SideCluster& other, const SharedCountOptions& o) {
   if (!other.edge || other.ray_ends.empty()) {
+    const double across = edge.glimpsed ? o.glimpse_across : o.edge_across;
+    const double below = edge.glimpsed ? o.glimpse_vertical : o.edge_below;
+    const double above = edge.glimpsed ? o.glimpse_vertical : o.edge_above;
     for (const auto& p : other.points)
-      if (OnAnySliverRay(p, edge, o.edge_across, o.edge_below, o.edge_above)) return true;
+      if (OnAnySliverRay(p, edge, across, below, above)) return true;
     return false;
   }
   // Two edge apples: samples of one's rays every centimetre against the other's.

@@ -32,6 +32,12 @@ struct SharedCountOptions {
   double edge_across = 0.04;
   double edge_below = 0.03;
   double edge_above = 0.08;
+  // A glimpsed apple (SideCluster::glimpsed) is linked along its rays, which
+  // pass through the sphere found for it: to a cluster of the other side
+  // with a point within glimpse_across (m) of a ray horizontally and within
+  // glimpse_vertical over or under it.
+  double glimpse_across = 0.04;
+  double glimpse_vertical = 0.08;
   // A cluster linked to nothing may show a partly hidden apple through a gap
   // in the leaves: its fruit points then lie where the gap is, in front of
   // the apple (the blob moves with the leaves), up to 70 cm nearer its own

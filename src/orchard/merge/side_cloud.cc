@@ -132,7 +132,8 @@ SideCloud LoadSideCloud(const fs::path& dir, const std::string& name, const std:
         c.id = std::stoi(f[0]);
         c.count = std::stoi(f[8]);
         c.count_unlinked = std::stoi(f[unlinked_col]);
-        c.edge = flag(f, edge_col) || flag(f, glimpsed_col);
+        c.glimpsed = flag(f, glimpsed_col);
+        c.edge = flag(f, edge_col) || c.glimpsed;
         if (f.size() > 12) count_frames[c.id] = f[12];
       } catch (const std::exception&) {
         Fail(name, " side: ", csv_path.string(), " line ", row, ": bad id or count");

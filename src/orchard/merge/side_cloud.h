@@ -30,6 +30,7 @@ struct SideCluster {
   // each ray's ends, consecutive pairs here, moved with the points), and
   // registrations leave it out.
   bool edge = false;
+  bool glimpsed = false;  // of the two, glimpsed: its rays pass through the apple's centre
   std::vector<Eigen::Vector3d> ray_ends;
   // Camera centres of the frames its count came from (clusters.csv `frames`,
   // cameras.csv; empty for sides written before cameras.csv), moved with the
