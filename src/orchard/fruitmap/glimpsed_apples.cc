@@ -57,19 +57,23 @@ double LongestChord(const cv::Mat1i& labels, const Blob& blob) {
   return longest + 1;  // pixel centres to outer edges
 }
 
-// The point on the ray through `pixel` that lies `distance` across the row;
-// false when the ray does not reach it in front of the camera.
-bool RayAt(const CameraView& view, const Eigen::Vector2d& pixel, const RowFrame& row, double distance,
-           Eigen::Vector3d* X) {
-  const Eigen::Vector2d n = view.Normalize(pixel);
-  const Eigen::Vector3d dir = view.R.transpose() * Eigen::Vector3d(n.x(), n.y(), 1);
-  const Eigen::Vector3d c = view.Center();
+// The point on the ray from `c` along `dir` that lies `distance` across the
+// row; false when the ray does not reach it ahead.
+bool AcrossOnRay(const Eigen::Vector3d& c, const Eigen::Vector3d& dir, const RowFrame& row, double distance,
+                 Eigen::Vector3d* X) {
   const double speed = row.across.dot(dir);
   if (speed <= 1e-9) return false;
   const double t = (distance - row.across.dot(c - row.origin)) / speed;
   if (t <= 0) return false;
   *X = c + t * dir;
   return true;
+}
+
+// ... on the ray through `pixel` of `view`.
+bool RayAt(const CameraView& view, const Eigen::Vector2d& pixel, const RowFrame& row, double distance,
+           Eigen::Vector3d* X) {
+  const Eigen::Vector2d n = view.Normalize(pixel);
+  return AcrossOnRay(view.Center(), view.R.transpose() * Eigen::Vector3d(n.x(), n.y(), 1), row, distance, X);
 }
 
 struct Sphere {
@@ -202,6 +206,17 @@ std::vector<GlimpsedApple> FindGlimpsedApples(const std::vector<CameraView>& vie
       a.pieces.emplace_back(h.first, p.id);
       Eigen::Vector3d X;
       a.piece_points.push_back(RayAt(views[h.first], p.centre, row, s.distance, &X) ? X : s.centre);
+      // The line of sight through the sphere's centre, for the merge.
+      const Eigen::Vector3d camera = views[h.first].Center();
+      const Eigen::Vector3d dir = (s.centre - camera).normalized();
+      GlimpsedApple::SightRay ray;
+      if (!AcrossOnRay(camera, dir, row, s.distance - o.ray_margin, &ray.near) ||
+          !AcrossOnRay(camera, dir, row, s.distance + o.ray_margin, &ray.far))
+        continue;  // not across the row: no ray to link along
+      Eigen::Vector2d pixel;
+      views[h.first].Project(s.centre, &pixel);
+      ray.column = pixel.x();
+      a.rays.push_back(ray);
     }
     apples.push_back(std::move(a));
   }

@@ -79,6 +79,14 @@ struct GlimpsedApple {
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
   std::vector<std::pair<int, int>> pieces;
   std::vector<Eigen::Vector3d> piece_points;
+  // Each piece's frame's line of sight through the centre, from ray_margin
+  // in front of it to ray_margin behind (pieces whose line of sight does
+  // not run across the row have none), and the centre's column there.
+  struct SightRay {
+    Eigen::Vector3d near = Eigen::Vector3d::Zero(), far = Eigen::Vector3d::Zero();
+    double column = 0;
+  };
+  std::vector<SightRay> rays;
   double distance = 0;  // across the row from the camera path (m)
   double error = 0;     // mean piece-centre offset from the disc's centre / disc radius
 };

@@ -348,18 +348,13 @@ void AddGlimpsedApples(const std::vector<CameraView>& views, const std::vector<F
       AppendPoint({X, f, id, static_cast<int>(a.pieces.size())}, &c, r);
       c.views.push_back({f, frames[f].FindBlob(id)->pixels, 1});
       c.view_blobs.push_back({id});
-      // Its place along the line of sight is the sphere's depth, a guess:
-      // the merge links it along the rays (as an edge apple) and the
-      // registrations leave it out.
-      const Eigen::Vector3d camera = views[f].Center();
-      const Eigen::Vector3d dir = (a.centre - camera).normalized();
-      const double speed = row.across.dot(dir);
-      if (speed <= 1e-9) continue;  // not across the row: no ray to link along
-      const auto at = [&](double d) { return camera + dir * ((d - row.across.dot(camera - row.origin)) / speed); };
-      c.edge_rays.emplace_back(at(a.distance - o.glimpsed.ray_margin), at(a.distance + o.glimpsed.ray_margin));
-      Eigen::Vector2d pixel;
-      views[f].Project(a.centre, &pixel);
-      c.edge_columns.push_back(pixel.x());
+    }
+    // Its place along the line of sight is the sphere's depth, a guess: the
+    // merge links it along the rays (as an edge apple) and the registrations
+    // leave it out.
+    for (const GlimpsedApple::SightRay& ray : a.rays) {
+      c.edge_rays.emplace_back(ray.near, ray.far);
+      c.edge_columns.push_back(ray.column);
     }
     c.count = c.count_by_pixels = c.count_by_count = MedianOfBestViews(c.views, o.best_views, &c.count_frames);
     c.height = ground.SignedDistance(c.centre);
