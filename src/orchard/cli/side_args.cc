@@ -159,6 +159,10 @@ void AddSideOptions(CLI::App* cmd, SideOptions* options) {
   cmd->add_option("--glimpse-min-extent", o.clusters.glimpsed.min_extent,
                   "Glimpsed apples: a piece's longest chord is at least this many times the disc's radius")
       ->capture_default_str();
+  cmd->add_option("--glimpse-ray-margin", o.clusters.glimpsed.ray_margin,
+                  "Glimpsed apples: the merge follows each piece's line of sight this far (m, across the row) in "
+                  "front of and behind the sphere")
+      ->capture_default_str();
   cmd->add_option("--draw-every", o.draw_every, "Annotate every n-th frame (0 = none)")->capture_default_str();
 }
 

@@ -754,6 +754,12 @@ TEST(SharedCountTest, GlimpsedApplesLinkAlongRaysThroughTheirCentre) {
   // Beside the ray, or farther under it, another apple.
   EXPECT_EQ(CountSharedApples({Cluster(1, 1, {{0.06, 2.5, 1.50}})}, back, o).total, 2);
   EXPECT_EQ(CountSharedApples({Cluster(1, 1, {{0.0, 2.5, 1.42}})}, back, o).total, 2);
+  // Near the rays of two front clusters, it is on the nearer one (the later
+  // in the list here), whichever comes first.
+  const SharedCount two =
+      CountSharedApples({Cluster(1, 1, {{0.03, 2.5, 1.50}}), Cluster(2, 1, {{-0.01, 2.6, 1.52}})}, back, o);
+  EXPECT_EQ(two.back_edge_on, std::vector<int>{1});
+  EXPECT_EQ(two.total, 2);
   o.glimpse_vertical = 0;
   EXPECT_THROW(o.Check(), Error);
 }

@@ -43,34 +43,42 @@ bool BoxesMeet(const SideCluster& a, const SideCluster& b, double margin) {
   return true;
 }
 
-// Whether p lies where the apple of the sliver on the ray a -> b may hang:
-// within `across` of it horizontally, from `below` under it to `above` over it.
-bool OnSliverRay(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double across,
-                 double below, double above) {
+constexpr double kNoLink = std::numeric_limits<double>::infinity();
+
+// How far (m, horizontally) p lies from the ray a -> b when it lies where the
+// apple of that sliver may hang: within `across` of it horizontally, from
+// `below` under it to `above` over it; kNoLink otherwise.
+double SliverRayOffset(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double across,
+                       double below, double above) {
   const Eigen::Vector2d d = (b - a).head<2>();
   const double len2 = d.squaredNorm();
   const double t = len2 > 0 ? std::clamp((p - a).head<2>().dot(d) / len2, 0.0, 1.0) : 0.0;
   const Eigen::Vector3d q = a + t * (b - a);
   const double dz = p.z() - q.z();
-  return (p - q).head<2>().norm() <= across && dz >= -below && dz <= above;
+  const double offset = (p - q).head<2>().norm();
+  return offset <= across && dz >= -below && dz <= above ? offset : kNoLink;
 }
 
-bool OnAnySliverRay(const Eigen::Vector3d& p, const SideCluster& edge, double across, double below, double above) {
+double SliverRaysOffset(const Eigen::Vector3d& p, const SideCluster& edge, double across, double below,
+                        double above) {
+  double best = kNoLink;
   for (size_t i = 0; i + 1 < edge.ray_ends.size(); i += 2)
-    if (OnSliverRay(p, edge.ray_ends[i], edge.ray_ends[i + 1], across, below, above)) return true;
-  return false;
+    best = std::min(best, SliverRayOffset(p, edge.ray_ends[i], edge.ray_ends[i + 1], across, below, above));
+  return best;
 }
 
 // Whether an edge apple (`edge`, with rays) and a cluster of the other side
-// are one apple (SharedCountOptions::edge_across and the rest).
-bool EdgeLinks(const SideCluster& edge, const SideCluster& other, const SharedCountOptions& o) {
+// are one apple (SharedCountOptions::edge_across and the rest): how near (m,
+// horizontally) the other's nearest point or ray sample comes to one of its
+// rays, kNoLink when none is within the bounds.
+double EdgeLinkOffset(const SideCluster& edge, const SideCluster& other, const SharedCountOptions& o) {
+  double best = kNoLink;
   if (!other.edge || other.ray_ends.empty()) {
     const double across = edge.glimpsed ? o.glimpse_across : o.edge_across;
     const double below = edge.glimpsed ? o.glimpse_vertical : o.edge_below;
     const double above = edge.glimpsed ? o.glimpse_vertical : o.edge_above;
-    for (const auto& p : other.points)
-      if (OnAnySliverRay(p, edge, across, below, above)) return true;
-    return false;
+    for (const auto& p : other.points) best = std::min(best, SliverRaysOffset(p, edge, across, below, above));
+    return best;
   }
   // Two edge apples: samples of one's rays every centimetre against the other's.
   for (size_t i = 0; i + 1 < other.ray_ends.size(); i += 2) {
@@ -78,29 +86,27 @@ bool EdgeLinks(const SideCluster& edge, const SideCluster& other, const SharedCo
     const Eigen::Vector3d& b = other.ray_ends[i + 1];
     const int steps = std::max(1, static_cast<int>((b - a).norm() / 0.01));
     for (int k = 0; k <= steps; ++k)
-      if (OnAnySliverRay(a + (b - a) * (static_cast<double>(k) / steps), edge, o.edge_across, o.edge_above,
-                         o.edge_above))
-        return true;
+      best = std::min(best, SliverRaysOffset(a + (b - a) * (static_cast<double>(k) / steps), edge, o.edge_across,
+                                             o.edge_above, o.edge_above));
   }
-  return false;
+  return best;
 }
 
 // How far (m) `behind`'s centre lies from the farthest of the lines of sight
 // from `seen`'s view centres through its centre, when it lies within the
 // depth window beyond it on all of them; infinity otherwise.
 double SightOffset(const SideCluster& seen, const SideCluster& behind, const SharedCountOptions& o) {
-  const double none = std::numeric_limits<double>::infinity();
-  if (seen.view_centres.empty()) return none;
+  if (seen.view_centres.empty()) return kNoLink;
   double worst = 0;
   const Eigen::Vector3d v = behind.centre - seen.centre;
   for (const auto& c : seen.view_centres) {
     const Eigen::Vector3d ray = seen.centre - c;
-    if (ray.norm() <= 0) return none;
+    if (ray.norm() <= 0) return kNoLink;
     const double t = v.dot(ray.normalized());
-    if (t < o.sight_min_behind || t > o.sight_max_behind) return none;
+    if (t < o.sight_min_behind || t > o.sight_max_behind) return kNoLink;
     worst = std::max(worst, std::sqrt(std::max(0.0, v.squaredNorm() - t * t)));
   }
-  return worst <= o.sight_across ? worst : none;
+  return worst <= o.sight_across ? worst : kNoLink;
 }
 
 int Find(std::vector<int>& parent, int i) {
@@ -126,18 +132,24 @@ SharedCount CountSharedApples(const std::vector<SideCluster>& front, const std::
   r.front_edge_on.assign(nf, -1);
   r.back_edge_on.assign(nb, -1);
   std::vector<std::pair<int, int>> edge_pairs;
+  // An edge apple near several of the other side's clusters' points is on the nearest.
+  std::vector<double> front_edge_offset(nf, kNoLink), back_edge_offset(nb, kNoLink);
   for (int f = 0; f < nf; ++f)
     for (int b = 0; b < nb; ++b) {
       const bool edge_f = is_edge(front[f]), edge_b = is_edge(back[b]);
       if (edge_f || edge_b) {
-        if (!EdgeLinks(edge_f ? front[f] : back[b], edge_f ? back[b] : front[f], o)) continue;
+        const double offset = EdgeLinkOffset(edge_f ? front[f] : back[b], edge_f ? back[b] : front[f], o);
+        if (!std::isfinite(offset)) continue;
         r.links.push_back({f, b, 1, 1});
-        if (edge_f && edge_b)
+        if (edge_f && edge_b) {
           edge_pairs.emplace_back(f, b);
-        else if (edge_f && r.front_edge_on[f] < 0)
+        } else if (edge_f && offset < front_edge_offset[f]) {
           r.front_edge_on[f] = b;
-        else if (edge_b && r.back_edge_on[b] < 0)
+          front_edge_offset[f] = offset;
+        } else if (edge_b && offset < back_edge_offset[b]) {
           r.back_edge_on[b] = f;
+          back_edge_offset[b] = offset;
+        }
         continue;
       }
       if (!BoxesMeet(front[f], back[b], d)) continue;
