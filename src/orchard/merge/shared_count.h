@@ -82,7 +82,7 @@ struct SharedCount {
   std::vector<int> front_counts, back_counts;
   // Per cluster: for an edge apple on the line of sight of the other side's
   // tracked cluster (all its count shared, in no group), that cluster's
-  // index; else -1.
+  // index (of several, the one with a point nearest its rays); else -1.
   std::vector<int> front_edge_on, back_edge_on;
   int sight_links = 0;  // links along a line of sight
 };
