@@ -103,6 +103,13 @@ void AddSideOptions(CLI::App* cmd, SideOptions* options) {
   cmd->add_option("--duplicate-distance", o.clusters.duplicate_max_distance,
                   "With --duplicate-shared: join only clusters whose centres lie within this distance (m)")
       ->capture_default_str();
+  cmd->add_option("--covered-max-points", o.clusters.covered_max_points,
+                  "Remove clusters of at most this many fruit points whose blobs a larger cluster's points cover in "
+                  "most of their views: that cluster's apple triangulated again (0 = never; 7 was measured)")
+      ->capture_default_str();
+  cmd->add_option("--covered-fraction", o.clusters.covered_fraction,
+                  "With --covered-max-points: the fraction of the cluster's views the larger cluster must cover")
+      ->capture_default_str();
   cmd->add_option("--assign-near", o.clusters.assign_near, "A point off every blob votes for the blob whose centre is near")
       ->capture_default_str();
   std::map<std::string, ClusterOptions::BestViews> best_views;

@@ -15,13 +15,13 @@ namespace orchard {
 
 double EquivalentRadius(const Blob& blob) { return std::sqrt(blob.pixels / M_PI); }
 
-namespace {
-
-Eigen::Vector2d Centre(const FruitFrame& frame, const Blob& b) {
+Eigen::Vector2d AppleCentrePixel(const FruitFrame& frame, const Blob& b) {
   // Blob centres are in OpenCV pixel indices; views use COLMAP's +0.5.
   const cv::Point2d c = frame.apple_centres.empty() ? b.centroid : frame.apple_centres[b.id - 1];
   return {c.x + 0.5, c.y + 0.5};
 }
+
+namespace {
 
 // Circle through three points; false when they are (nearly) collinear.
 bool CircleThrough(const cv::Point2d& a, const cv::Point2d& b, const cv::Point2d& c, cv::Point2d* centre,
@@ -185,7 +185,7 @@ BlobCentres::BlobCentres(const FruitFrame& frame, int cell_pixels) : frame_(&fra
   for (size_t i = 0; i < frame.blobs.size(); ++i) {
     const Blob& b = frame.blobs[i];
     if (b.pixels <= 0) continue;
-    const Eigen::Vector2d c = Centre(frame, b);
+    const Eigen::Vector2d c = AppleCentrePixel(frame, b);
     const int cx = std::clamp(static_cast<int>(c.x()) / cell_, 0, cols_ - 1);
     const int cy = std::clamp(static_cast<int>(c.y()) / cell_, 0, rows_ - 1);
     grid_[static_cast<size_t>(cy) * cols_ + cx].push_back(static_cast<int>(i));
@@ -224,7 +224,7 @@ int BlobCentres::Near(const CameraView& view, const Eigen::Vector3d& X, const Fr
       for (int i : grid_[static_cast<size_t>(y) * cols_ + x]) {
         const Blob& b = frame_->blobs[i];
         const double tol = std::max({o.centre_fraction * EquivalentRadius(b), apple_px, 2.0});
-        const double d = (p - Centre(*frame_, b)).norm();
+        const double d = (p - AppleCentrePixel(*frame_, b)).norm();
         if (d <= tol && d < nearest) nearest = d, id = b.id;
       }
   return id;
@@ -369,7 +369,7 @@ std::vector<FruitPoint> TriangulateFruitPoints(const std::vector<CameraView>& vi
   for (int i = 0; i < n; ++i) {
     const double tol = o.max_error_fraction * views[i].width;
     for (const Blob& blob : frames[i].blobs) {
-      const Eigen::Vector2d pi = Centre(frames[i], blob);
+      const Eigen::Vector2d pi = AppleCentrePixel(frames[i], blob);
       const Eigen::Vector3d hi(pi.x(), pi.y(), 1);
       std::vector<FruitPointCandidate>& candidates = per_blob.emplace_back();
       for (int j = i + o.min_partner_offset; j <= std::min(n - 1, i + o.max_partner_offset); ++j) {
@@ -378,7 +378,7 @@ std::vector<FruitPoint> TriangulateFruitPoints(const std::vector<CameraView>& vi
         const double line_norm = line.head<2>().norm();
         if (line_norm < 1e-12) continue;
         for (const Blob& other : frames[j].blobs) {
-          const Eigen::Vector2d pj = Centre(frames[j], other);
+          const Eigen::Vector2d pj = AppleCentrePixel(frames[j], other);
           if (std::abs(line.dot(Eigen::Vector3d(pj.x(), pj.y(), 1))) / line_norm > tol) continue;
           Eigen::Vector3d X;
           if (!TriangulatePoint({&views[i], &views[j]}, {pi, pj}, &X)) continue;
@@ -392,7 +392,7 @@ std::vector<FruitPoint> TriangulateFruitPoints(const std::vector<CameraView>& vi
             std::vector<const CameraView*> vs;
             std::vector<Eigen::Vector2d> ps;
             for (const auto& [f, id] : s.blobs) {
-              const Eigen::Vector2d c = Centre(frames[f], *frames[f].FindBlob(id));
+              const Eigen::Vector2d c = AppleCentrePixel(frames[f], *frames[f].FindBlob(id));
               if (round > 0 && ReprojectionError(views[f], X, c) > tol) continue;
               vs.push_back(&views[f]), ps.push_back(c);
             }
@@ -406,7 +406,7 @@ std::vector<FruitPoint> TriangulateFruitPoints(const std::vector<CameraView>& vi
               std::find(s.blobs.begin(), s.blobs.end(), std::make_pair(i, blob.id)) == s.blobs.end())
             continue;
           double error = 0;
-          for (const auto& [f, id] : s.blobs) error += ReprojectionError(views[f], X, Centre(frames[f], *frames[f].FindBlob(id)));
+          for (const auto& [f, id] : s.blobs) error += ReprojectionError(views[f], X, AppleCentrePixel(frames[f], *frames[f].FindBlob(id)));
           error /= s.hits;
           candidates.push_back({{X, i, blob.id, s.hits}, s.in_image, std::move(s.blobs), error});
         }

@@ -87,6 +87,10 @@ struct FruitPointOptions {
 // or too little outline to fit). Deterministic for a given blob.
 cv::Point2d FitAppleCentre(const cv::Mat1i& labels, const Blob& blob);
 
+// The blob's apple centre (apple_centres, else its centroid) in COLMAP pixel
+// coordinates, as views project.
+Eigen::Vector2d AppleCentrePixel(const FruitFrame& frame, const Blob& blob);
+
 // Fills frame->apple_centres with FitAppleCentre for every blob.
 void FitAppleCentres(FruitFrame* frame);
 

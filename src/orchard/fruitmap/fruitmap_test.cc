@@ -130,17 +130,18 @@ TEST(ResolvedMinAppleFraction, LargerForInstanceMasksThanForADetectorsBlobs) {
   EXPECT_DOUBLE_EQ(ResolvedMinAppleFraction(o, detected), 0.7);
 }
 
-// Frames of 3D balls (radius r) rendered as discs into label images.
+// Frames of 3D balls (radius radii[i]) rendered as discs into label images.
 std::vector<FruitFrame> RenderBalls(const std::vector<CameraView>& views, const std::vector<Eigen::Vector3d>& balls,
-                                    double r) {
+                                    const std::vector<double>& radii) {
   std::vector<FruitFrame> frames;
   for (const auto& v : views) {
     FruitFrame f;
     f.labels = cv::Mat1i::zeros(v.height, v.width);
-    for (const auto& b : balls) {
+    for (size_t i = 0; i < balls.size(); ++i) {
+      const Eigen::Vector3d& b = balls[i];
       Eigen::Vector2d p;
       if (!v.Project(b, &p)) continue;
-      const double rad = v.fx * r / v.Depth(b);
+      const double rad = v.fx * radii[i] / v.Depth(b);
       const int id = static_cast<int>(f.blobs.size()) + 1;
       cv::Mat1b disc = cv::Mat1b::zeros(f.labels.size());
       cv::circle(disc, cv::Point(static_cast<int>(p.x()), static_cast<int>(p.y())), static_cast<int>(rad), 255, -1);
@@ -158,6 +159,12 @@ std::vector<FruitFrame> RenderBalls(const std::vector<CameraView>& views, const 
     frames.push_back(f);
   }
   return frames;
+}
+
+// Frames of 3D balls of radius r.
+std::vector<FruitFrame> RenderBalls(const std::vector<CameraView>& views, const std::vector<Eigen::Vector3d>& balls,
+                                    double r) {
+  return RenderBalls(views, balls, std::vector<double>(balls.size(), r));
 }
 
 // Fruit-point distances: `points` spread evenly over [from, to).
@@ -679,6 +686,68 @@ TEST(CountFruitClusters, AnAppleWhoseCentreTheAppleInFrontHidesIsCounted) {
   r = CountFruitClusters(views, frames, ground, o);
   EXPECT_EQ(kept(r), 1);
   EXPECT_EQ(r.count, 1);
+}
+
+TEST(CountFruitClusters, AFewPointsOnBlobsALargerClusterCoversAreItsAppleAgain) {
+  std::vector<CameraView> views;
+  for (int i = 0; i < 16; ++i) views.push_back(ViewAt(-0.5 + 0.1 * i));
+  // Apple a, and apple b beside it (7 cm to the left). Leaves hide a in
+  // frames 5 to 9, and in the last six all of it but a small piece 2.6 cm
+  // right of its centre: a's points lie too far from the piece's centre to
+  // vote for it.
+  const Eigen::Vector3d a(0.2, 0, 1.4), b = a - Eigen::Vector3d(0.07, 0, 0), piece = a + Eigen::Vector3d(0.026, 0, 0);
+  std::vector<FruitFrame> frames;
+  for (int i = 0; i < 16; ++i)
+    frames.push_back(i < 5    ? RenderBalls({views[i]}, {a, b}, 0.04)[0]
+                     : i < 10 ? RenderBalls({views[i]}, {b}, 0.04)[0]
+                              : RenderBalls({views[i]}, {piece, b}, std::vector<double>{0.015, 0.04})[0]);
+  // a's points, b's, and two points of a second track of a through its
+  // pieces, 16 cm behind the piece along the line of sight of frame 12.5:
+  // they win the pieces' blobs.
+  std::vector<FruitPoint> points;
+  for (int i = 0; i < 8; ++i) points.push_back({a + Eigen::Vector3d(0.002 * (i % 3), 0, 0.002 * (i / 3)), i, 1, 8});
+  for (int i = 0; i < 3; ++i) points.push_back({b + Eigen::Vector3d(0, 0, 0.002 * i), i, 2, 8});
+  const Eigen::Vector3d camera(0.75, -2.5, 1.5), second = piece + 0.16 * (piece - camera).normalized();
+  for (int i = 0; i < 2; ++i) points.push_back({second + Eigen::Vector3d(0.002 * i, 0, 0), 10 + i, 1, 6});
+  Plane ground;  // z = 0
+  ClusterOptions o;
+  o.min_apple_fraction = 0;  // the pieces are small
+  ASSERT_EQ(o.covered_max_points, 0);  // never, by default
+  ClusterResult r = CountFruitClusters(views, frames, ground, o, points);
+  std::map<std::string, int> status;
+  for (const auto& c : r.clusters) status[c.status] += 1;
+  ASSERT_EQ(r.clusters.size(), 3u);
+  EXPECT_EQ(status["kept"], 3);  // the duplicate join misses it: less than half its votes fall on a's blobs
+  EXPECT_EQ(r.count, 3);
+  const FruitCluster& again = r.clusters[2];
+  EXPECT_EQ(again.points.size(), 2u);
+  EXPECT_EQ(again.views.size(), 6u);
+  EXPECT_EQ(again.cover_id, r.clusters[0].id);  // found, not acted on
+  o.covered_max_points = 7;
+  r = CountFruitClusters(views, frames, ground, o, points);
+  EXPECT_EQ(r.count, 2);
+  EXPECT_EQ(r.clusters[0].status, "kept");
+  EXPECT_EQ(r.clusters[1].status, "kept");  // b: a's points lie two radii from its centre
+  EXPECT_EQ(r.clusters[1].cover_id, 0);
+  EXPECT_EQ(r.clusters[2].status, "covered");
+  EXPECT_EQ(r.clusters[2].cover_id, r.clusters[0].id);
+  EXPECT_EQ(r.clusters[2].cover_views, 6);
+  EXPECT_NEAR(r.clusters[2].cover_distance, 0.16, 0.02);
+  // In frame 15 the piece lies farther right, beyond an apple radius from
+  // a's points: covered in five of its six views, kept when all are asked for.
+  frames[15] = RenderBalls({views[15]}, {a + Eigen::Vector3d(0.04, 0, 0), b}, std::vector<double>{0.015, 0.04})[0];
+  r = CountFruitClusters(views, frames, ground, o, points);
+  EXPECT_EQ(r.clusters[2].views.size(), 6u);
+  EXPECT_EQ(r.clusters[2].cover_views, 5);
+  EXPECT_EQ(r.count, 2);
+  o.covered_fraction = 1;
+  r = CountFruitClusters(views, frames, ground, o, points);
+  EXPECT_EQ(r.count, 3);
+  // Farther from the cluster covering it than a duplicate lies: kept.
+  o.covered_fraction = 0.7;
+  o.duplicate_max_distance = 0.1;
+  r = CountFruitClusters(views, frames, ground, o, points);
+  EXPECT_EQ(r.count, 3);
 }
 
 TEST(EvidenceStatus, FewViewsGhostsAndSmallBlobsAreRemoved) {

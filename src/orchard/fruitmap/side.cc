@@ -167,6 +167,49 @@ std::vector<int> JoinSharingComponents(const std::vector<BlobVotes>& votes, int 
   return root;
 }
 
+// For each cluster, the cluster with more points whose points land within an
+// apple radius (at the point's depth) of one of its blobs' centres in the
+// most of its views (FruitCluster::cover_id, ClusterOptions::covered_fraction).
+void FindCoveringClusters(const std::vector<CameraView>& views, const std::vector<FruitFrame>& frames,
+                          const std::vector<Eigen::Vector3d>& xyz, const ClusterOptions& o, ClusterResult* r) {
+  struct Projected {
+    Eigen::Vector2d pixel;
+    int cluster;
+    double apple_px;  // an apple's radius at the point's depth
+  };
+  std::vector<std::vector<Projected>> projected(frames.size());
+  for (size_t f = 0; f < frames.size(); ++f)
+    for (size_t i = 0; i < xyz.size(); ++i) {
+      const double z = views[f].Depth(xyz[i]);
+      Eigen::Vector2d p;
+      bool inside = false;
+      if (z < o.points.min_depth || !ProjectNearFrame(views[f], xyz[i], o.points, &p, &inside)) continue;
+      projected[f].push_back({p, r->point_cluster[i], views[f].fx * o.points.apple_radius / z});
+    }
+  for (FruitCluster& c : r->clusters) {
+    const int self = c.id - 1;
+    std::map<int, int> views_covered;  // cluster index -> views
+    for (size_t v = 0; v < c.views.size(); ++v) {
+      const int f = c.views[v].frame;
+      std::set<int> covering;
+      for (const int blob : c.view_blobs[v]) {
+        const Eigen::Vector2d centre = AppleCentrePixel(frames[f], *frames[f].FindBlob(blob));
+        for (const Projected& q : projected[f])
+          if (q.cluster != self && r->clusters[q.cluster].points.size() > c.points.size() &&
+              (q.pixel - centre).norm() <= q.apple_px)
+            covering.insert(q.cluster);
+      }
+      for (const int h : covering) ++views_covered[h];
+    }
+    c.cover_id = c.cover_views = 0;
+    for (const auto& [h, n] : views_covered)
+      if (n > c.cover_views) {
+        c.cover_id = h + 1, c.cover_views = n;
+        c.cover_distance = (r->clusters[h].centre - c.centre).norm();
+      }
+  }
+}
+
 }  // namespace
 
 std::vector<int> MergeSharedComponents(const std::vector<BlobVotes>& votes, int k, double fraction) {
@@ -204,6 +247,9 @@ void ClusterOptions::Check() const {
                        "duplicate co-view fraction must be in (0, 1], got ", duplicate_coview_fraction);
   ORCHARD_CHECK_OPTION(duplicate_max_distance > 0, "duplicate max distance must be positive, got ",
                        duplicate_max_distance);
+  ORCHARD_CHECK_OPTION(covered_max_points >= 0, "covered max points must be >= 0, got ", covered_max_points);
+  ORCHARD_CHECK_OPTION(covered_fraction > 0 && covered_fraction <= 1, "covered fraction must be in (0, 1], got ",
+                       covered_fraction);
   ORCHARD_CHECK_OPTION(best_views >= 1, "best views must be at least 1, got ", best_views);
   ORCHARD_CHECK_OPTION(row_distance >= 0, "row distance must be >= 0, got ", row_distance);
   ORCHARD_CHECK_OPTION(row_min_share > 0 && row_min_share <= 1, "row min share must be in (0, 1], got ",
@@ -289,7 +335,7 @@ void AddEdgeApples(const std::vector<CameraView>& views, const std::vector<Fruit
   // are not apples the 3D stage missed).
   std::vector<Eigen::Vector3d> explained;
   for (const auto& c : r->clusters)
-    if (c.status == "kept" || c.status == "too_few_points")
+    if (c.status == "kept" || c.status == "too_few_points" || c.status == "covered")
       for (int i : c.points) explained.push_back(r->points[i].xyz);
   const RowFrame row{r->row_origin, r->row_along, r->row_across, r->row_up, r->row_distance};
   if (row.row_distance <= 0) return;  // no kept fruit: nothing tells where the row is
@@ -332,7 +378,8 @@ void AddGlimpsedApples(const std::vector<CameraView>& views, const std::vector<F
   // free: they may be an apple glimpsed too rarely for a cluster.
   std::vector<Eigen::Vector3d> explained;
   for (const auto& c : r->clusters)
-    if (c.status == "kept" || c.status == "too_few_points" || c.status == "next_row" || c.status == "fallen")
+    if (c.status == "kept" || c.status == "too_few_points" || c.status == "covered" || c.status == "next_row" ||
+        c.status == "fallen")
       for (int i : c.points) explained.push_back(r->points[i].xyz);
   const RowFrame row{r->row_origin, r->row_along, r->row_across, r->row_up, r->row_distance};
   if (row.row_distance <= 0) return;
@@ -483,6 +530,8 @@ ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std
       build();
     }
   }
+  // Always: `--truth` reports each cluster's cover (truth_clusters.csv).
+  FindCoveringClusters(views, frames, xyz, o, &r);
   Eigen::Vector3d mean, along, across;
   PathAxes(views, ground, &mean, &along, &across);
   // Up is the ground normal on the cameras' side; along completes a
@@ -527,8 +576,17 @@ ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std
     // Nothing grows between the camera and the row: clusters there are
     // chance pairings of different apples' blobs.
     if (c.status == "kept" && c.distance < r.row_distance - o.near_margin) c.status = "too_near";
-    if (c.status == "kept") r.count += c.count;
   }
+  // A few points that another kept cluster's points cover in most of their
+  // views are that cluster's apple triangulated again.
+  for (auto& c : r.clusters) {
+    if (c.status == "kept" && c.cover_id > 0 && static_cast<int>(c.points.size()) <= o.covered_max_points &&
+        c.cover_views >= o.covered_fraction * static_cast<double>(c.views.size()) &&
+        c.cover_distance <= o.duplicate_max_distance && r.clusters[c.cover_id - 1].status == "kept")
+      c.status = "covered";
+  }
+  for (const auto& c : r.clusters)
+    if (c.status == "kept") r.count += c.count;
   if (o.edge.enabled) AddEdgeApples(views, frames, ground, o, &r);
   if (o.glimpsed.enabled) AddGlimpsedApples(views, frames, ground, o, &r);
   return r;
@@ -928,7 +986,8 @@ void WriteTruthClusters(const fs::path& path, const ClusterResult& result, const
   for (const ClusterTruth& c : t.clusters)
     for (const int apple : c.credited) holder[apple] = &result.clusters[c.cluster];
   std::ostringstream csv;
-  csv << "id,x,y,z,count,points,views,votes_won,role,credited,top_apple,top_votes,holder,holder_distance\n";
+  csv << "id,x,y,z,count,points,views,votes_won,role,credited,top_apple,top_votes,holder,holder_distance,cover_id,"
+         "cover_views,cover_distance\n";
   csv.precision(4);
   csv << std::fixed;
   for (const ClusterTruth& c : t.clusters) {
@@ -943,6 +1002,7 @@ void WriteTruthClusters(const fs::path& path, const ClusterResult& result, const
       csv << h->second->id << ',' << (h->second->centre - cluster.centre).norm();
     else
       csv << ',';
+    csv << ',' << cluster.cover_id << ',' << cluster.cover_views << ',' << cluster.cover_distance;
     csv << '\n';
   }
   WriteTextFileAtomic(path, csv.str());
@@ -1268,6 +1328,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
       {"counter", in.counter_name},
       {"best_views_by", BestViewsName(clusters.best_views_by)},
       {"min_apple_fraction", clusters.min_apple_fraction},
+      {"covered_max_points", clusters.covered_max_points},
       {"scale", scale},
       {"ground_plane", {{"normal", {ground.normal.x(), ground.normal.y(), ground.normal.z()}}, {"d", ground.d},
                         {"source", ground_source}}},

@@ -534,6 +534,8 @@ YieldSummary RunYield(const YieldInputs& in, const YieldOptions& o) {
       {"glimpsed_apples", ResolvedGlimpsedApples(o.side.clusters, in.front)},
       {"edge_min_pixels", ResolvedEdgeMinPixels(o.side.clusters, in.front)},
       {"min_apple_fraction", ResolvedMinAppleFraction(o.side.clusters, in.front)},
+      {"covered_max_points", o.side.clusters.covered_max_points},
+      {"covered_fraction", o.side.clusters.covered_fraction},
       {"best_views_by", BestViewsName(ResolvedBestViews(o.side.clusters, in.front))},
       {"sides_best_views_by", BestViewsName(ResolvedBestViews(one_side, in.front))},
       {"unlinked_count", unlinked_column},
