@@ -713,6 +713,7 @@ TEST(CountFruitClusters, AFewPointsOnBlobsALargerClusterCoversAreItsAppleAgain) 
   ClusterOptions o;
   o.min_apple_fraction = 0;  // the pieces are small
   ASSERT_EQ(o.covered_max_points, 0);  // never, by default
+  o.find_covers = true;  // reported all the same
   ClusterResult r = CountFruitClusters(views, frames, ground, o, points);
   std::map<std::string, int> status;
   for (const auto& c : r.clusters) status[c.status] += 1;

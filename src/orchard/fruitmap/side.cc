@@ -530,8 +530,9 @@ ClusterResult CountFruitClusters(const std::vector<CameraView>& views, const std
       build();
     }
   }
-  // Always: `--truth` reports each cluster's cover (truth_clusters.csv).
-  FindCoveringClusters(views, frames, xyz, o, &r);
+  // A few per cent of a side's time, quadratic in a frame's points: only
+  // for the rule, or for `--truth` to report (truth_clusters.csv).
+  if (o.covered_max_points > 0 || o.find_covers) FindCoveringClusters(views, frames, xyz, o, &r);
   Eigen::Vector3d mean, along, across;
   PathAxes(views, ground, &mean, &along, &across);
   // Up is the ground normal on the cameras' side; along completes a
@@ -1178,6 +1179,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
     c.edge.min_pixels = ResolvedEdgeMinPixels(c, in);
     c.min_apple_fraction = ResolvedMinAppleFraction(c, in);
     c.glimpsed.enabled = ResolvedGlimpsedApples(c, in);
+    c.find_covers = c.find_covers || !in.truth.empty();
     return c;
   };
   const ClusterOptions clusters = resolved(o.clusters);

@@ -109,6 +109,9 @@ struct ClusterOptions {
   // (docs/side.md, fiftieth session).
   int covered_max_points = 0;
   double covered_fraction = 0.7;
+  // Find each cluster's cover (FruitCluster::cover_id) even with the rule
+  // off; RunSide sets it when scoring against the truth.
+  bool find_covers = false;
   // A point votes for the blob whose centre it is near (as in the support
   // check) before the blob under it: a partly hidden apple's centre often
   // lies on the apple in front of it, and voting for that blob left the
