@@ -13,7 +13,10 @@
 #   (about 5 minutes a row on one core).
 # Every fourth row (seeds FIRST+3, FIRST+7, ...) has a flat canopy
 # (`--canopy-thickness 0.5`, many apples seen from both sides), as in the
-# batches reported in docs/side.md and docs/yield.md. Rows run JOBS at a time
+# batches reported in docs/side.md and docs/yield.md. SYNTH_OPTIONS (words
+# split on spaces) go to every row's `orchard synth` instead, with no flat
+# rows: SYNTH_OPTIONS="--canopy round --canopy-thickness 1.6 --row-spacing 4.5"
+# gives the round canopies of docs/side.md. Rows run JOBS at a time
 # (default 2, one thread each). Rerunning resumes: rows already generated are
 # kept, runs already finished are not redone (other YIELD_OPTIONS need another
 # OUT_DIR, or OUT_DIR/runs removed). Writes OUT_DIR/rows/rSEED (the
@@ -43,7 +46,11 @@ mkdir -p "$OUT/rows" "$OUT/runs"
 
 one_row() {
   local seed=$1 row=$OUT/rows/r$1 run=$OUT/runs/$1 flat=()
-  (( (seed - FIRST) % 4 == 3 )) && flat=(--canopy-thickness 0.5)
+  if [[ -n ${SYNTH_OPTIONS:-} ]]; then
+    read -r -a flat <<< "$SYNTH_OPTIONS"
+  elif (( (seed - FIRST) % 4 == 3 )); then
+    flat=(--canopy-thickness 0.5)
+  fi
   if [[ ! -f $row/truth.json ]]; then
     rm -rf "$row"
     "$ORCHARD" synth --out "$row" --seed "$seed" --patch-every 0 "${flat[@]}" > "$OUT/rows/synth$seed.log" 2>&1 ||
