@@ -45,15 +45,15 @@ JOBS=${JOBS:-2}
 mkdir -p "$OUT/rows" "$OUT/runs"
 
 one_row() {
-  local seed=$1 row=$OUT/rows/r$1 run=$OUT/runs/$1 flat=()
+  local seed=$1 row=$OUT/rows/r$1 run=$OUT/runs/$1 synth_args=()
   if [[ -n ${SYNTH_OPTIONS:-} ]]; then
-    read -r -a flat <<< "$SYNTH_OPTIONS"
+    read -r -a synth_args <<< "$SYNTH_OPTIONS"
   elif (( (seed - FIRST) % 4 == 3 )); then
-    flat=(--canopy-thickness 0.5)
+    synth_args=(--canopy-thickness 0.5)
   fi
   if [[ ! -f $row/truth.json ]]; then
     rm -rf "$row"
-    "$ORCHARD" synth --out "$row" --seed "$seed" --patch-every 0 "${flat[@]}" > "$OUT/rows/synth$seed.log" 2>&1 ||
+    "$ORCHARD" synth --out "$row" --seed "$seed" --patch-every 0 "${synth_args[@]}" > "$OUT/rows/synth$seed.log" 2>&1 ||
       { echo "seed $seed: synth failed, see $OUT/rows/synth$seed.log" >&2; return 1; }
   fi
   [[ -f $run/yield.json ]] && return 0

@@ -7,6 +7,7 @@
 #include <map>
 #include <set>
 #include <sstream>
+#include <string_view>
 
 #include <Eigen/Eigenvalues>
 #include <nlohmann/json.hpp>
@@ -187,6 +188,9 @@ void FindCoveringClusters(const std::vector<CameraView>& views, const std::vecto
       projected[f].push_back({p, r->point_cluster[i], views[f].fx * o.points.apple_radius / z});
     }
   for (FruitCluster& c : r->clusters) {
+    c.cover_id = c.cover_views = 0;
+    // Only the rule's small clusters need a cover, unless all are reported.
+    if (!o.find_covers && static_cast<int>(c.points.size()) > o.covered_max_points) continue;
     const int self = c.id - 1;
     std::map<int, int> views_covered;  // cluster index -> views
     for (size_t v = 0; v < c.views.size(); ++v) {
@@ -201,7 +205,6 @@ void FindCoveringClusters(const std::vector<CameraView>& views, const std::vecto
       }
       for (const int h : covering) ++views_covered[h];
     }
-    c.cover_id = c.cover_views = 0;
     for (const auto& [h, n] : views_covered)
       if (n > c.cover_views) {
         c.cover_id = h + 1, c.cover_views = n;
@@ -324,6 +327,16 @@ void AppendPoint(const FruitPoint& point, FruitCluster* c, ClusterResult* r) {
   r->point_cluster.push_back(static_cast<int>(r->clusters.size()));
 }
 
+// The fruit points of the clusters whose status is one of `statuses`: the
+// points that explain the pieces of the apples those clusters hold.
+std::vector<Eigen::Vector3d> PointsOfClusters(const ClusterResult& r, std::initializer_list<std::string_view> statuses) {
+  std::vector<Eigen::Vector3d> points;
+  for (const auto& c : r.clusters)
+    if (std::find(statuses.begin(), statuses.end(), c.status) != statuses.end())
+      for (int i : c.points) points.push_back(r.points[i].xyz);
+  return points;
+}
+
 // Appends the apples seen only at the frames' top edge (EdgeAppleOptions) to
 // `r` as kept clusters of one apple each, after the kept clusters, whose
 // points explain the slivers of the apples they hold.
@@ -333,10 +346,7 @@ void AddEdgeApples(const std::vector<CameraView>& views, const std::vector<Fruit
   // is one that a cluster too small for these rules lies on (`orchard
   // yield` keeps only clusters of 4 points for the merge, and its slivers
   // are not apples the 3D stage missed).
-  std::vector<Eigen::Vector3d> explained;
-  for (const auto& c : r->clusters)
-    if (c.status == "kept" || c.status == "too_few_points" || c.status == "covered")
-      for (int i : c.points) explained.push_back(r->points[i].xyz);
+  const std::vector<Eigen::Vector3d> explained = PointsOfClusters(*r, {"kept", "too_few_points", "covered"});
   const RowFrame row{r->row_origin, r->row_along, r->row_across, r->row_up, r->row_distance};
   if (row.row_distance <= 0) return;  // no kept fruit: nothing tells where the row is
   const std::vector<EdgeSighting> sightings = FindEdgeSightings(views, frames, explained, row, o.edge);
@@ -376,11 +386,8 @@ void AddGlimpsedApples(const std::vector<CameraView>& views, const std::vector<F
   // row's apples, seen through gaps in the leaves, are most of the pieces no
   // kept cluster holds). Pieces of clusters removed for weak evidence stay
   // free: they may be an apple glimpsed too rarely for a cluster.
-  std::vector<Eigen::Vector3d> explained;
-  for (const auto& c : r->clusters)
-    if (c.status == "kept" || c.status == "too_few_points" || c.status == "covered" || c.status == "next_row" ||
-        c.status == "fallen")
-      for (int i : c.points) explained.push_back(r->points[i].xyz);
+  const std::vector<Eigen::Vector3d> explained =
+      PointsOfClusters(*r, {"kept", "too_few_points", "covered", "next_row", "fallen"});
   const RowFrame row{r->row_origin, r->row_along, r->row_across, r->row_up, r->row_distance};
   if (row.row_distance <= 0) return;
   for (const GlimpsedApple& a : FindGlimpsedApples(views, frames, explained, row, r->depth_cutoff, o.glimpsed)) {
