@@ -46,8 +46,19 @@ void AddSideOptions(CLI::App* cmd, SideOptions* options) {
   cmd->add_flag("!--no-triangulate-poses", o.triangulate_given_poses,
                 "Leave given poses without 3D points as they are (default: COLMAP triangulates points for them, "
                 "for the ground fit and the trunks)");
-  cmd->add_flag("!--no-thin-frames", o.thin_dense_frames,
-                "Use all frames even when they are much denser than the 3D stage is tuned to (default: every k-th)");
+  cmd->add_option("--dense-frames", o.dense_frames,
+                  "Frames much denser than the 3D stage is tuned to: thin (default: every k-th used), scale (all "
+                  "used, its frame counts made as many times larger) or all (used as they are)")
+      ->transform(CLI::CheckedTransformer(
+          std::map<std::string, DenseFrames>{
+              {"scale", DenseFrames::kScale}, {"thin", DenseFrames::kThin}, {"all", DenseFrames::kAll}},
+          CLI::ignore_case));
+  cmd->add_flag_callback(
+      "--no-thin-frames", [&o] { o.dense_frames = DenseFrames::kAll; }, "Same as --dense-frames all");
+  cmd->add_option("--frame-scale", o.clusters.frame_scale,
+                  "Make the 3D stage's frame counts this many times larger (spans in frames k times, counts of "
+                  "frames over a stretch n -> k (n - 1) + 1), for frames this many times denser than it is tuned to")
+      ->capture_default_str();
   cmd->add_option("--link-distance", o.clusters.link_distance, "Fruit points closer than this (m) form a cluster")
       ->capture_default_str();
   cmd->add_option("--min-support", o.clusters.points.min_support, "A fruit point must land on fruit in this many frames")

@@ -236,6 +236,7 @@ std::vector<int> MergeDuplicateComponents(const std::vector<BlobVotes>& votes,
 void ClusterOptions::Check() const {
   points.Check();
   ORCHARD_CHECK_OPTION(link_distance > 0, "link distance must be positive, got ", link_distance);
+  ORCHARD_CHECK_OPTION(frame_scale >= 1, "frame scale must be at least 1, got ", frame_scale);
   ORCHARD_CHECK_OPTION(min_points >= 1, "min cluster points must be at least 1, got ", min_points);
   ORCHARD_CHECK_OPTION(min_views >= 1, "min cluster views must be at least 1, got ", min_views);
   ORCHARD_CHECK_OPTION(max_lost_fraction > 0 && max_lost_fraction <= 1, "max lost fraction must be in (0, 1], got ",
@@ -283,6 +284,27 @@ int ResolvedEdgeMinPixels(const ClusterOptions& o, const SideInputs& in) {
 double ResolvedMinAppleFraction(const ClusterOptions& o, const SideInputs& in) {
   if (o.min_apple_fraction >= 0) return o.min_apple_fraction;
   return in.detector ? kDetectorMinAppleFraction : kInstanceMinAppleFraction;
+}
+
+ClusterOptions ScaledToFrameDensity(ClusterOptions o) {
+  const int k = o.frame_scale;
+  if (k == 1) return o;
+  // Spans in frames (partners, windows) grow k times; n frames over a
+  // stretch of the path become k (n - 1) + 1 at k times the density.
+  const auto frames_over = [k](int n) { return k * (n - 1) + 1; };
+  o.points.max_partner_offset *= k;
+  o.points.support_window *= k;
+  o.edge.window *= k;
+  o.glimpsed.window *= k;
+  o.points.min_support = frames_over(o.points.min_support);
+  o.min_points = frames_over(o.min_points);
+  o.min_views = frames_over(o.min_views);
+  o.glimpsed.min_support = frames_over(o.glimpsed.min_support);
+  // The median of the best views is their ((n + 1) / 2)-th highest: that
+  // rank counts frames too.
+  o.best_views = 2 * frames_over((o.best_views + 1) / 2) - 1;
+  o.frame_scale = 1;
+  return o;
 }
 
 bool ResolvedGlimpsedApples(const ClusterOptions& o, const SideInputs& in) {
@@ -1182,6 +1204,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   }
   s.fruit_s = stopwatch.Lap();
   const auto resolved = [&in](ClusterOptions c) {
+    c = ScaledToFrameDensity(c);
     c.best_views_by = ResolvedBestViews(c, in);
     c.edge.min_pixels = ResolvedEdgeMinPixels(c, in);
     c.min_apple_fraction = ResolvedMinAppleFraction(c, in);
@@ -1189,30 +1212,44 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
     c.find_covers = c.find_covers || !in.truth.empty();
     return c;
   };
-  const ClusterOptions clusters = resolved(o.clusters);
+  ClusterOptions clusters = resolved(o.clusters);
   ClusterResult r = CountFruitClusters(views, frames, ground, clusters);
   // Frames much denser than the 3D stage is tuned to count high
-  // (CheckFrameSpacing): every k-th is kept and counted again. The spacing
-  // needs the row distance, which only the clusters give.
-  int thinned_every = 1;
-  const ReconstructionCheckOptions& rc = o.reconstruction_check;
-  if (o.thin_dense_frames && r.row_distance > 0 && check.median_step > 0 &&
+  // (CheckFrameSpacing): the side is counted again with its frame counts k
+  // times larger, or on every k-th frame. The spacing needs the row
+  // distance, which only the clusters give.
+  int thinned_every = 1, frame_scale = o.clusters.frame_scale;
+  ReconstructionCheckOptions rc = o.reconstruction_check;
+  rc.frame_spacing_reference /= frame_scale;  // frame counts given k times larger: frames k times denser
+  if (o.dense_frames != DenseFrames::kAll && r.row_distance > 0 && check.median_step > 0 &&
       check.median_step / r.row_distance < rc.min_frame_spacing * rc.frame_spacing_reference) {
-    thinned_every = std::max(2, static_cast<int>(std::lround(rc.frame_spacing_reference * r.row_distance /
-                                                               check.median_step)));
-    const auto every_kth = [thinned_every](auto* v) {
-      size_t kept = 0;
-      for (size_t i = 0; i < v->size(); i += thinned_every, ++kept)
-        if (i != kept) (*v)[kept] = std::move((*v)[i]);  // never onto itself: a self-move empties a vector
-      v->resize(kept);
-    };
-    every_kth(&views), every_kth(&model_views), every_kth(&frames), every_kth(&image_paths);
-    if (static_cast<int>(views.size()) < o.colmap.min_registered)
-      Fail("only ", views.size(), " frames left after keeping every ", thinned_every,
-           "-th of frames too dense for the 3D stage (need ", o.colmap.min_registered, ")");
-    spdlog::info("frames {:.1f} cm apart at {:.2f} m from the fruit: every {}-th used ({} frames)",
-                 100 * check.median_step, r.row_distance, thinned_every, views.size());
-    check = CheckReconstruction(views, ground, &model, rc);
+    const int k = std::max(2, static_cast<int>(std::lround(rc.frame_spacing_reference * r.row_distance /
+                                                           check.median_step)));
+    if (o.dense_frames == DenseFrames::kScale) {
+      frame_scale *= k;
+      rc.frame_spacing_reference /= k;
+      ClusterOptions scaled = o.clusters;
+      scaled.frame_scale = frame_scale;
+      clusters = resolved(scaled);
+      spdlog::info("frames {:.1f} cm apart at {:.2f} m from the fruit: all {} used, the 3D stage's frame counts {} "
+                   "times larger",
+                   100 * check.median_step, r.row_distance, views.size(), frame_scale);
+    } else {
+      thinned_every = k;
+      const auto every_kth = [k](auto* v) {
+        size_t kept = 0;
+        for (size_t i = 0; i < v->size(); i += k, ++kept)
+          if (i != kept) (*v)[kept] = std::move((*v)[i]);  // never onto itself: a self-move empties a vector
+        v->resize(kept);
+      };
+      every_kth(&views), every_kth(&model_views), every_kth(&frames), every_kth(&image_paths);
+      if (static_cast<int>(views.size()) < o.colmap.min_registered)
+        Fail("only ", views.size(), " frames left after keeping every ", k,
+             "-th of frames too dense for the 3D stage (need ", o.colmap.min_registered, ")");
+      spdlog::info("frames {:.1f} cm apart at {:.2f} m from the fruit: every {}-th used ({} frames)",
+                   100 * check.median_step, r.row_distance, k, views.size());
+      check = CheckReconstruction(views, ground, &model, o.reconstruction_check);
+    }
     r = CountFruitClusters(views, frames, ground, clusters);
   }
   const auto fruit_of = [](const ClusterResult& result) {
@@ -1273,14 +1310,16 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
     if (!c.edge && c.count == 1 && (c.status == "kept" || c.status == "small"))
       single_apple_radii.push_back(c.apple_radius_seen);
   CheckAppleSize(std::move(single_apple_radii), clusters.points.apple_radius, o.reconstruction_check, &check);
-  CheckFrameSpacing(r.row_distance, o.reconstruction_check, &check);
+  CheckFrameSpacing(r.row_distance, rc, &check);
   for (size_t i = logged; i < check.warnings.size(); ++i) spdlog::warn("reconstruction: {}", check.warnings[i]);
   s.one_side_count = r.count;
   std::optional<ClusterResult> one_side_result;
   if (o.one_side_clusters) {
     // One row, one distance: found on the clusters above, not again on the
     // other rules' (their densest band moved 25-75 cm on 4 of 186 sides).
-    ClusterOptions one_side = resolved(*o.one_side_clusters);
+    ClusterOptions one_side = *o.one_side_clusters;
+    one_side.frame_scale = frame_scale;
+    one_side = resolved(one_side);
     if (one_side.row_distance <= 0) one_side.row_distance = r.row_distance;
     // The triangulated points only: the edge apples are found again under these rules.
     one_side_result = CountFruitClusters(
@@ -1328,7 +1367,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
       {"one_side_count", s.one_side_count},
       {"single_frame_sum", s.single_frame_sum},
       {"frames", {{"input", num_frames}, {"registered", s.frames_registered}, {"used", s.frames_used},
-                  {"every", thinned_every},
+                  {"every", thinned_every}, {"frame_scale", frame_scale},
                   {"unregistered", unregistered}}},
       {"poses", in.poses.empty() ? "colmap" : in.poses.string()},
       {"mapper_attempts", mapper_attempts},

@@ -197,7 +197,7 @@ TEST_F(SideTest, StepThinsGivenPosesAndSparseFramesAreWarnedAbout) {
       << s.warnings.back();
 }
 
-TEST(SideDenseFramesTest, FramesTwiceTooDenseAreThinnedToEveryOther) {
+TEST(SideDenseFramesTest, FramesTwiceTooDenseAreThinnedOrScaleTheFrameCounts) {
   // 16 frames per second: 6.25 cm steps, half the spacing the 3D stage is tuned to.
   const fs::path dir = fs::temp_directory_path() / ("orchard_side_dense_" + std::to_string(::getpid()));
   fs::remove_all(dir);
@@ -214,26 +214,68 @@ TEST(SideDenseFramesTest, FramesTwiceTooDenseAreThinnedToEveryOther) {
   in.poses = dir / "synth/front/sparse";
   in.masks = dir / "synth/front/masks";
   in.ground = ParseGroundPlane((dir / "synth/front/scene.json").string());
-  in.out = dir / "out";
   SideOptions o;
   o.draw_every = 0;
   o.triangulate_given_poses = false;  // as in SideTest::Options
+  // Default: every other frame.
+  in.out = dir / "thin";
   const SideSummary s = RunSide(in, o);
-  const auto side = nlohmann::json::parse(ReadTextFile(dir / "out/side.json"));
+  auto side = nlohmann::json::parse(ReadTextFile(dir / "thin/side.json"));
   const int input = side.at("frames").at("input").get<int>();
   EXPECT_EQ(side.at("frames").at("every").get<int>(), 2);
+  EXPECT_EQ(side.at("frames").at("frame_scale").get<int>(), 1);
   EXPECT_EQ(s.frames_used, (input + 1) / 2);
   EXPECT_EQ(s.frames_registered, input);
   EXPECT_NEAR(side.at("reconstruction").at("median_step").get<double>(), 0.125, 0.01);  // of the frames used
   EXPECT_TRUE(s.warnings.empty()) << s.warnings.front();  // the thinned spacing is the tuned one
-  // Without thinning the spacing is warned about.
-  o.thin_dense_frames = false;
+  // Scaled: all frames, the frame counts twice as large; the spacing is then the tuned one.
+  o.dense_frames = DenseFrames::kScale;
+  in.out = dir / "scale";
+  const SideSummary scaled = RunSide(in, o);
+  side = nlohmann::json::parse(ReadTextFile(dir / "scale/side.json"));
+  EXPECT_EQ(side.at("frames").at("frame_scale").get<int>(), 2);
+  EXPECT_EQ(side.at("frames").at("every").get<int>(), 1);
+  EXPECT_EQ(scaled.frames_used, input);
+  EXPECT_TRUE(scaled.warnings.empty()) << scaled.warnings.front();
+  // All frames as they are: the spacing is warned about.
+  o.dense_frames = DenseFrames::kAll;
   in.out = dir / "all";
   const SideSummary all = RunSide(in, o);
   EXPECT_EQ(all.frames_used, input);
   ASSERT_FALSE(all.warnings.empty());
   EXPECT_NE(all.warnings.back().find("the count is likely high"), std::string::npos) << all.warnings.back();
+  // The frame counts given twice as large by hand: the same spacing is the tuned one.
+  o.clusters.frame_scale = 2;
+  in.out = dir / "given";
+  const SideSummary given = RunSide(in, o);
+  EXPECT_EQ(given.count, scaled.count);
+  EXPECT_TRUE(given.warnings.empty()) << given.warnings.front();
   fs::remove_all(dir);
+}
+
+TEST(ScaledToFrameDensityTest, SpansGrowKTimesCountsOverTheSameStretch) {
+  ClusterOptions o;
+  o.min_points = 4;
+  o.frame_scale = 3;
+  const ClusterOptions s = ScaledToFrameDensity(o);
+  EXPECT_EQ(s.frame_scale, 1);
+  EXPECT_EQ(s.points.max_partner_offset, 18);  // 6 frames ahead: 18 at 3 times the density
+  EXPECT_EQ(s.points.min_partner_offset, 1);   // the nearest partner stays the next frame
+  EXPECT_EQ(s.points.support_window, 18);
+  EXPECT_EQ(s.edge.window, 39);
+  EXPECT_EQ(s.glimpsed.window, 18);
+  EXPECT_EQ(s.points.min_support, 7);  // 3 frames span 2 steps: 7 frames at a third of the step
+  EXPECT_EQ(s.min_points, 10);
+  EXPECT_EQ(s.min_views, 7);
+  EXPECT_EQ(s.glimpsed.min_support, 7);
+  EXPECT_EQ(s.best_views, 7);  // the median of 3 is the 2nd highest; of 7, the 4th
+  EXPECT_EQ(s.points.min_support_ratio, o.points.min_support_ratio);  // fractions stay
+  o.frame_scale = 1;
+  o.best_views = 4;  // an even number of views stays as given
+  const ClusterOptions same = ScaledToFrameDensity(o);
+  EXPECT_EQ(same.best_views, o.best_views);
+  EXPECT_EQ(same.points.min_support, o.points.min_support);
+  EXPECT_EQ(same.min_points, o.min_points);
 }
 
 TEST_F(SideTest, CommandCountsDetectorBlobsWithTheCnnByDefault) {
