@@ -1203,7 +1203,11 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
     if (frames.size() % 20 == 0) spdlog::info("fruit in {} of {} frames", frames.size(), views.size());
   }
   s.fruit_s = stopwatch.Lap();
-  const auto resolved = [&in](ClusterOptions c) {
+  // Every rule set of this side is scaled alike: by the frame_scale given,
+  // and by k more when dense frames are all counted (below).
+  int frame_scale = o.clusters.frame_scale;
+  const auto resolved = [&in, &frame_scale](ClusterOptions c) {
+    c.frame_scale = frame_scale;
     c = ScaledToFrameDensity(c);
     c.best_views_by = ResolvedBestViews(c, in);
     c.edge.min_pixels = ResolvedEdgeMinPixels(c, in);
@@ -1218,19 +1222,21 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   // (CheckFrameSpacing): the side is counted again with its frame counts k
   // times larger, or on every k-th frame. The spacing needs the row
   // distance, which only the clusters give.
-  int thinned_every = 1, frame_scale = o.clusters.frame_scale;
-  ReconstructionCheckOptions rc = o.reconstruction_check;
-  rc.frame_spacing_reference /= frame_scale;  // frame counts given k times larger: frames k times denser
+  int thinned_every = 1;
+  // Frame counts k times larger are tuned to frames k times denser.
+  const auto spacing_check = [&o, &frame_scale] {
+    ReconstructionCheckOptions rc = o.reconstruction_check;
+    rc.frame_spacing_reference /= frame_scale;
+    return rc;
+  };
+  const ReconstructionCheckOptions rc = spacing_check();
   if (o.dense_frames != DenseFrames::kAll && r.row_distance > 0 && check.median_step > 0 &&
       check.median_step / r.row_distance < rc.min_frame_spacing * rc.frame_spacing_reference) {
     const int k = std::max(2, static_cast<int>(std::lround(rc.frame_spacing_reference * r.row_distance /
                                                            check.median_step)));
     if (o.dense_frames == DenseFrames::kScale) {
       frame_scale *= k;
-      rc.frame_spacing_reference /= k;
-      ClusterOptions scaled = o.clusters;
-      scaled.frame_scale = frame_scale;
-      clusters = resolved(scaled);
+      clusters = resolved(o.clusters);
       spdlog::info("frames {:.1f} cm apart at {:.2f} m from the fruit: all {} used, the 3D stage's frame counts {} "
                    "times larger",
                    100 * check.median_step, r.row_distance, views.size(), frame_scale);
@@ -1310,16 +1316,14 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
     if (!c.edge && c.count == 1 && (c.status == "kept" || c.status == "small"))
       single_apple_radii.push_back(c.apple_radius_seen);
   CheckAppleSize(std::move(single_apple_radii), clusters.points.apple_radius, o.reconstruction_check, &check);
-  CheckFrameSpacing(r.row_distance, rc, &check);
+  CheckFrameSpacing(r.row_distance, spacing_check(), &check);
   for (size_t i = logged; i < check.warnings.size(); ++i) spdlog::warn("reconstruction: {}", check.warnings[i]);
   s.one_side_count = r.count;
   std::optional<ClusterResult> one_side_result;
   if (o.one_side_clusters) {
     // One row, one distance: found on the clusters above, not again on the
     // other rules' (their densest band moved 25-75 cm on 4 of 186 sides).
-    ClusterOptions one_side = *o.one_side_clusters;
-    one_side.frame_scale = frame_scale;
-    one_side = resolved(one_side);
+    ClusterOptions one_side = resolved(*o.one_side_clusters);
     if (one_side.row_distance <= 0) one_side.row_distance = r.row_distance;
     // The triangulated points only: the edge apples are found again under these rules.
     one_side_result = CountFruitClusters(
