@@ -55,13 +55,29 @@ void AddSideOptions(CLI::App* cmd, SideOptions* options) {
           CLI::ignore_case));
   cmd->add_flag_callback(
       "--no-thin-frames", [&o] { o.dense_frames = DenseFrames::kAll; }, "Same as --dense-frames all");
+  cmd->add_option("--sparse-frames", o.sparse_frames,
+                  "Frames more than --sparse-frames-from times as far apart as the 3D stage is tuned to: scale "
+                  "(default: its frame counts made as many times smaller, down to --min-sparse-frame-scale) or keep "
+                  "(used as they are, warned about)")
+      ->transform(CLI::CheckedTransformer(
+          std::map<std::string, SparseFrames>{{"scale", SparseFrames::kScale}, {"keep", SparseFrames::kKeep}},
+          CLI::ignore_case));
+  cmd->add_option("--sparse-frames-from", o.sparse_frames_from,
+                  "Frames this many times as far apart as the 3D stage is tuned to are sparse")
+      ->capture_default_str();
+  cmd->add_option("--min-sparse-frame-scale", o.min_sparse_frame_scale,
+                  "Sparse frames make the 3D stage's frame counts at most this many times smaller")
+      ->capture_default_str();
   cmd->add_option("--frame-scale", o.clusters.frame_scale,
                   "Make the 3D stage's frame counts this many times larger (spans in frames k times, counts of "
-                  "frames over a stretch n -> k (n - 1) + 1), for frames this many times denser than it is tuned to")
+                  "frames over a stretch n -> k (n - 1) + 1, rounded), for frames this many times denser than it is "
+                  "tuned to (below 1: sparser)")
       ->capture_default_str();
   cmd->add_option("--link-distance", o.clusters.link_distance, "Fruit points closer than this (m) form a cluster")
       ->capture_default_str();
   cmd->add_option("--min-support", o.clusters.points.min_support, "A fruit point must land on fruit in this many frames")
+      ->capture_default_str();
+  cmd->add_option("--min-views", o.clusters.min_views, "A cluster must win a blob in this many frames")
       ->capture_default_str();
   cmd->add_option("--support-ratio", o.clusters.points.min_support_ratio,
                   "... and in this fraction of the frames it falls into")

@@ -236,7 +236,7 @@ std::vector<int> MergeDuplicateComponents(const std::vector<BlobVotes>& votes,
 void ClusterOptions::Check() const {
   points.Check();
   ORCHARD_CHECK_OPTION(link_distance > 0, "link distance must be positive, got ", link_distance);
-  ORCHARD_CHECK_OPTION(frame_scale >= 1, "frame scale must be at least 1, got ", frame_scale);
+  ORCHARD_CHECK_OPTION(frame_scale > 0, "frame scale must be positive, got ", frame_scale);
   ORCHARD_CHECK_OPTION(min_points >= 1, "min cluster points must be at least 1, got ", min_points);
   ORCHARD_CHECK_OPTION(min_views >= 1, "min cluster views must be at least 1, got ", min_views);
   ORCHARD_CHECK_OPTION(max_lost_fraction > 0 && max_lost_fraction <= 1, "max lost fraction must be in (0, 1], got ",
@@ -287,15 +287,17 @@ double ResolvedMinAppleFraction(const ClusterOptions& o, const SideInputs& in) {
 }
 
 ClusterOptions ScaledToFrameDensity(ClusterOptions o) {
-  const int k = o.frame_scale;
+  const double k = o.frame_scale;
   if (k == 1) return o;
   // Spans in frames (partners, windows) grow k times; n frames over a
-  // stretch of the path become k (n - 1) + 1 at k times the density.
-  const auto frames_over = [k](int n) { return k * (n - 1) + 1; };
-  o.points.max_partner_offset *= k;
-  o.points.support_window *= k;
-  o.edge.window *= k;
-  o.glimpsed.window *= k;
+  // stretch of the path become k (n - 1) + 1 at k times the density. Both
+  // are rounded to whole frames and never fall below one (k < 1: sparser).
+  const auto span = [k](int n) { return std::max(1, static_cast<int>(std::lround(k * n))); };
+  const auto frames_over = [k](int n) { return std::max(1, static_cast<int>(std::lround(k * (n - 1) + 1))); };
+  o.points.max_partner_offset = std::max(o.points.min_partner_offset, span(o.points.max_partner_offset));
+  o.points.support_window = span(o.points.support_window);
+  o.edge.window = span(o.edge.window);
+  o.glimpsed.window = span(o.glimpsed.window);
   o.points.min_support = frames_over(o.points.min_support);
   o.min_points = frames_over(o.min_points);
   o.min_views = frames_over(o.min_views);
@@ -666,6 +668,9 @@ void SideOptions::Check() const {
   clusters.Check();
   ORCHARD_CHECK_OPTION(camera_height > 0, "camera height must be positive, got ", camera_height);
   ORCHARD_CHECK_OPTION(draw_every >= 0, "draw every must be >= 0, got ", draw_every);
+  ORCHARD_CHECK_OPTION(sparse_frames_from >= 1, "sparse frames from must be at least 1, got ", sparse_frames_from);
+  ORCHARD_CHECK_OPTION(min_sparse_frame_scale > 0 && min_sparse_frame_scale <= 1,
+                       "min sparse frame scale must be in (0, 1], got ", min_sparse_frame_scale);
   ORCHARD_CHECK_OPTION(max_refit_scale_change > 1, "max refit scale change must be > 1, got ",
                        max_refit_scale_change);
   if (one_side_clusters) one_side_clusters->Check();
@@ -1205,7 +1210,7 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   s.fruit_s = stopwatch.Lap();
   // Every rule set of this side is scaled alike: by the frame_scale given,
   // and by k more when dense frames are all counted (below).
-  int frame_scale = o.clusters.frame_scale;
+  double frame_scale = o.clusters.frame_scale;
   const auto resolved = [&in, &frame_scale](ClusterOptions c) {
     c.frame_scale = frame_scale;
     c = ScaledToFrameDensity(c);
@@ -1256,6 +1261,14 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
                    100 * check.median_step, r.row_distance, k, views.size());
       check = CheckReconstruction(views, ground, &model, o.reconstruction_check);
     }
+    r = CountFruitClusters(views, frames, ground, clusters);
+  } else if (o.sparse_frames == SparseFrames::kScale && r.row_distance > 0 && check.median_step > 0 &&
+             check.median_step / r.row_distance > o.sparse_frames_from * rc.frame_spacing_reference) {
+    // Frames too sparse cannot be thinned: the frame counts shrink instead.
+    frame_scale *= std::max(o.min_sparse_frame_scale, rc.frame_spacing_reference * r.row_distance / check.median_step);
+    clusters = resolved(o.clusters);
+    spdlog::info("frames {:.1f} cm apart at {:.2f} m from the fruit: the 3D stage's frame counts {:.2g} times as large",
+                 100 * check.median_step, r.row_distance, frame_scale);
     r = CountFruitClusters(views, frames, ground, clusters);
   }
   const auto fruit_of = [](const ClusterResult& result) {

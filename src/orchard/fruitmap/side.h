@@ -33,6 +33,9 @@ namespace fs = std::filesystem;
 // What a side does with frames much denser than the 3D stage is tuned to
 // (SideOptions::dense_frames).
 enum class DenseFrames { kScale, kThin, kAll };
+// What the side does with frames much sparser than the 3D stage is tuned to
+// (SideOptions::sparse_frames).
+enum class SparseFrames { kScale, kKeep };
 
 struct ClusterOptions {
   FruitPointOptions points;
@@ -195,9 +198,10 @@ struct ClusterOptions {
   // The frame counts above (partners, support window and support, views,
   // points, best views, the edge and glimpse windows and support) are tuned
   // to frames about 0.057 row distances apart; frames k times denser are
-  // counted with them made k times larger (1: as given; SideOptions::
-  // dense_frames sets it from the spacing). ScaledToFrameDensity applies it.
-  int frame_scale = 1;
+  // counted with them made k times larger (1: as given; k < 1: sparser;
+  // SideOptions::dense_frames and sparse_frames set it from the spacing).
+  // ScaledToFrameDensity applies it.
+  double frame_scale = 1;
   void Check() const;
 };
 
@@ -360,6 +364,20 @@ struct SideOptions {
   // 3%, but the rows 20 against 22 of 22 within 2% (MAE 0.86 -> 0.98%;
   // docs/side.md, fifty-second session); kAll counts them as they are.
   DenseFrames dense_frames = DenseFrames::kThin;
+  // Frames farther apart than sparse_frames_from times the tuned spacing
+  // cannot be thinned: kScale counts the side again with the 3D stage's frame
+  // counts made k = (the tuned spacing / theirs) times as large, k < 1
+  // (ClusterOptions::frame_scale), but not below min_sparse_frame_scale;
+  // kKeep counts them as they are (warned about). Exact masks, true poses,
+  // 24 rows filmed at 3-5 frames per second not used to choose the rule:
+  // sides within 3% 19 -> 37 of 48 (mean -3.4 -> -0.3%), rows within 2% 18
+  // -> 19 of 24. At 1.4 times the spacing (6 per second) the smaller counts
+  // took sides 2-4 points high, and below k = 0.6 (the best views' median
+  // becomes the best view at k < 0.5) rows at 4 per second 4% high
+  // (docs/side.md, "Frames too sparse").
+  SparseFrames sparse_frames = SparseFrames::kScale;
+  double sparse_frames_from = 1.5;
+  double min_sparse_frame_scale = 0.6;
   // Camera height above the ground (m), which fixes the scale of a COLMAP
   // reconstruction (the synthetic rows film from 1.5 m).
   double camera_height = 1.5;
@@ -413,7 +431,8 @@ bool ResolvedGlimpsedApples(const ClusterOptions& options, const SideInputs& in)
 // `options` with its frame counts made options.frame_scale = k times larger
 // (and frame_scale 1): spans in frames (partners, windows) k times, counts
 // of frames over a stretch of the path (support, views, points, the rank of
-// the best views' median) n -> k (n - 1) + 1.
+// the best views' median) n -> k (n - 1) + 1, each rounded to whole frames
+// and at least one (k < 1 shrinks them for sparser frames).
 ClusterOptions ScaledToFrameDensity(ClusterOptions options);
 // "auto", "pixels" or "count", as the command line and the outputs name them.
 const char* BestViewsName(ClusterOptions::BestViews best_views);

@@ -183,18 +183,40 @@ TEST_F(SideTest, WarnsWhenApplesShowTheScaleIsWrong) {
   EXPECT_NE(s.warnings.back().find("the scale is likely too small"), std::string::npos) << s.warnings.back();
 }
 
-TEST_F(SideTest, StepThinsGivenPosesAndSparseFramesAreWarnedAbout) {
+TEST_F(SideTest, StepThinsGivenPosesAndSparseFramesScaleTheFrameCountsOrAreWarnedAbout) {
   SideOptions o = Options();
   o.frames.step = 2;  // every other frame: 25 cm apart, twice the tuned spacing
+  o.sparse_frames = SparseFrames::kKeep;
   const SideSummary s = RunSide(Inputs("step2"), o);
   const auto side = nlohmann::json::parse(ReadTextFile(*dir_ / "step2/side.json"));
   EXPECT_EQ(side.at("frames").at("input").get<int>(), 11);  // frames 0, 2, ..., 20 of 21
   EXPECT_EQ(s.frames_used, 11);
   EXPECT_TRUE(side.at("frames").at("unregistered").empty());  // the skipped frames are not "left out"
   EXPECT_NEAR(side.at("reconstruction").at("median_step").get<double>(), 0.25, 0.02);
+  EXPECT_EQ(side.at("frames").at("frame_scale").get<double>(), 1);
   ASSERT_FALSE(s.warnings.empty());
   EXPECT_NE(s.warnings.back().find("the count is likely low; keep more frames"), std::string::npos)
       << s.warnings.back();
+  // Scaled: the same frames, the 3D stage's frame counts smaller: the tuned
+  // 0.057 row distances over 25 cm steps at about 2.1 m would make them 0.48
+  // times as large, the floor keeps 0.6 (within the warning's bound), and
+  // apples seen in fewer of the sparse frames count.
+  o.sparse_frames = SparseFrames::kScale;
+  const SideSummary scaled = RunSide(Inputs("step2_scaled"), o);
+  const auto scaled_side = nlohmann::json::parse(ReadTextFile(*dir_ / "step2_scaled/side.json"));
+  EXPECT_EQ(scaled_side.at("frames").at("frame_scale").get<double>(), o.min_sparse_frame_scale);
+  EXPECT_EQ(scaled.frames_used, 11);
+  for (const auto& w : scaled.warnings) EXPECT_EQ(w.find("frames "), std::string::npos) << w;
+  o.min_sparse_frame_scale = 0.4;
+  RunSide(Inputs("step2_scaled_more"), o);
+  EXPECT_NEAR(nlohmann::json::parse(ReadTextFile(*dir_ / "step2_scaled_more/side.json"))
+                  .at("frames")
+                  .at("frame_scale")
+                  .get<double>(),
+              0.057 * 2.12 / 0.254, 0.02);
+  // Nearer the apples visible (127 on this row: 113 as they are, 116 scaled).
+  const int visible = nlohmann::json::parse(ReadTextFile(*dir_ / "synth/truth.json")).at("visible_front").get<int>();
+  EXPECT_LT(std::abs(scaled.count - visible), std::abs(s.count - visible)) << s.count << " " << scaled.count;
 }
 
 TEST(SideDenseFramesTest, FramesTwiceTooDenseAreThinnedOrScaleTheFrameCounts) {
@@ -223,7 +245,7 @@ TEST(SideDenseFramesTest, FramesTwiceTooDenseAreThinnedOrScaleTheFrameCounts) {
   auto side = nlohmann::json::parse(ReadTextFile(dir / "thin/side.json"));
   const int input = side.at("frames").at("input").get<int>();
   EXPECT_EQ(side.at("frames").at("every").get<int>(), 2);
-  EXPECT_EQ(side.at("frames").at("frame_scale").get<int>(), 1);
+  EXPECT_EQ(side.at("frames").at("frame_scale").get<double>(), 1);
   EXPECT_EQ(s.frames_used, (input + 1) / 2);
   EXPECT_EQ(s.frames_registered, input);
   EXPECT_NEAR(side.at("reconstruction").at("median_step").get<double>(), 0.125, 0.01);  // of the frames used
@@ -233,7 +255,7 @@ TEST(SideDenseFramesTest, FramesTwiceTooDenseAreThinnedOrScaleTheFrameCounts) {
   in.out = dir / "scale";
   const SideSummary scaled = RunSide(in, o);
   side = nlohmann::json::parse(ReadTextFile(dir / "scale/side.json"));
-  EXPECT_EQ(side.at("frames").at("frame_scale").get<int>(), 2);
+  EXPECT_EQ(side.at("frames").at("frame_scale").get<double>(), 2);
   EXPECT_EQ(side.at("frames").at("every").get<int>(), 1);
   EXPECT_EQ(scaled.frames_used, input);
   EXPECT_TRUE(scaled.warnings.empty()) << scaled.warnings.front();
@@ -270,6 +292,23 @@ TEST(ScaledToFrameDensityTest, SpansGrowKTimesCountsOverTheSameStretch) {
   EXPECT_EQ(s.glimpsed.min_support, 7);
   EXPECT_EQ(s.best_views, 7);  // the median of 3 is the 2nd highest; of 7, the 4th
   EXPECT_EQ(s.points.min_support_ratio, o.points.min_support_ratio);  // fractions stay
+  // Sparser frames (k < 1): the same stretch holds fewer frames, rounded, never under one.
+  o.frame_scale = 0.6;
+  const ClusterOptions sparse = ScaledToFrameDensity(o);
+  EXPECT_EQ(sparse.points.max_partner_offset, 4);  // 3.6 frames
+  EXPECT_EQ(sparse.points.support_window, 4);
+  EXPECT_EQ(sparse.edge.window, 8);  // 7.8
+  EXPECT_EQ(sparse.points.min_support, 2);  // 3 frames over 2 steps: 2.2 at 1 / 0.6 times the step
+  EXPECT_EQ(sparse.min_points, 3);          // 2.8
+  EXPECT_EQ(sparse.min_views, 2);
+  EXPECT_EQ(sparse.glimpsed.min_support, 2);
+  EXPECT_EQ(sparse.best_views, 3);  // the 2nd highest: 1.6 frames, rounded to 2
+  o.frame_scale = 0.2;
+  const ClusterOptions sparsest = ScaledToFrameDensity(o);
+  EXPECT_EQ(sparsest.points.max_partner_offset, 1);
+  EXPECT_EQ(sparsest.points.min_partner_offset, 1);
+  EXPECT_EQ(sparsest.points.min_support, 1);
+  EXPECT_EQ(sparsest.best_views, 1);
   o.frame_scale = 1;
   o.best_views = 4;  // an even number of views stays as given
   const ClusterOptions same = ScaledToFrameDensity(o);
