@@ -1209,7 +1209,8 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   }
   s.fruit_s = stopwatch.Lap();
   // Every rule set of this side is scaled alike: by the frame_scale given,
-  // and by k more when dense frames are all counted (below).
+  // and by k more when dense frames are all counted or sparse ones scaled
+  // (below).
   double frame_scale = o.clusters.frame_scale;
   const auto resolved = [&in, &frame_scale](ClusterOptions c) {
     c.frame_scale = frame_scale;
@@ -1225,7 +1226,8 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
   ClusterResult r = CountFruitClusters(views, frames, ground, clusters);
   // Frames much denser than the 3D stage is tuned to count high
   // (CheckFrameSpacing): the side is counted again with its frame counts k
-  // times larger, or on every k-th frame. The spacing needs the row
+  // times larger, or on every k-th frame; much sparser ones count low, and
+  // are counted again with them smaller. The spacing needs the row
   // distance, which only the clusters give.
   int thinned_every = 1;
   // Frame counts k times larger are tuned to frames k times denser.
