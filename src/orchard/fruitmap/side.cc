@@ -1237,16 +1237,15 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
     return rc;
   };
   const ReconstructionCheckOptions rc = spacing_check();
-  if (o.dense_frames != DenseFrames::kAll && r.row_distance > 0 && check.median_step > 0 &&
-      check.median_step / r.row_distance < rc.min_frame_spacing * rc.frame_spacing_reference) {
-    const int k = std::max(2, static_cast<int>(std::lround(rc.frame_spacing_reference * r.row_distance /
-                                                           check.median_step)));
+  // How many times denser than the tuned spacing the frames are (0: unknown).
+  const double density = r.row_distance > 0 && check.median_step > 0
+                             ? rc.frame_spacing_reference * r.row_distance / check.median_step
+                             : 0;
+  double frame_rescale = 1;  // the frame counts' further factor
+  if (o.dense_frames != DenseFrames::kAll && density * rc.min_frame_spacing > 1) {
+    const int k = std::max(2, static_cast<int>(std::lround(density)));
     if (o.dense_frames == DenseFrames::kScale) {
-      frame_scale *= k;
-      clusters = resolved(o.clusters);
-      spdlog::info("frames {:.1f} cm apart at {:.2f} m from the fruit: all {} used, the 3D stage's frame counts {} "
-                   "times larger",
-                   100 * check.median_step, r.row_distance, views.size(), frame_scale);
+      frame_rescale = k;
     } else {
       thinned_every = k;
       const auto every_kth = [k](auto* v) {
@@ -1263,16 +1262,17 @@ SideSummary RunSide(const SideInputs& in, const SideOptions& o) {
                    100 * check.median_step, r.row_distance, k, views.size());
       check = CheckReconstruction(views, ground, &model, o.reconstruction_check);
     }
-    r = CountFruitClusters(views, frames, ground, clusters);
-  } else if (o.sparse_frames == SparseFrames::kScale && r.row_distance > 0 && check.median_step > 0 &&
-             check.median_step / r.row_distance > o.sparse_frames_from * rc.frame_spacing_reference) {
-    // Frames too sparse cannot be thinned: the frame counts shrink instead.
-    frame_scale *= std::max(o.min_sparse_frame_scale, rc.frame_spacing_reference * r.row_distance / check.median_step);
-    clusters = resolved(o.clusters);
-    spdlog::info("frames {:.1f} cm apart at {:.2f} m from the fruit: the 3D stage's frame counts {:.2g} times as large",
-                 100 * check.median_step, r.row_distance, frame_scale);
-    r = CountFruitClusters(views, frames, ground, clusters);
+  } else if (o.sparse_frames == SparseFrames::kScale && density > 0 && density * o.sparse_frames_from < 1) {
+    frame_rescale = std::max(o.min_sparse_frame_scale, density);  // too sparse to thin: the frame counts shrink
   }
+  if (frame_rescale != 1) {
+    frame_scale *= frame_rescale;
+    clusters = resolved(o.clusters);
+    spdlog::info("frames {:.1f} cm apart at {:.2f} m from the fruit: all {} used, the 3D stage's frame counts {:.2g} "
+                 "times as large",
+                 100 * check.median_step, r.row_distance, views.size(), frame_scale);
+  }
+  if (frame_rescale != 1 || thinned_every != 1) r = CountFruitClusters(views, frames, ground, clusters);
   const auto fruit_of = [](const ClusterResult& result) {
     std::vector<Eigen::Vector3d> fruit;
     for (int i = 0; i < result.triangulated_points; ++i) fruit.push_back(result.points[i].xyz);
